@@ -1,0 +1,6 @@
+"""jaxrail: differentiable railway vehicle dynamics in JAX."""
+
+from ._float64 import enable_float64 as enable_float64
+from ._float64 import require_float64 as require_float64
+
+__version__ = "0.1.0"

@@ -1,0 +1,76 @@
+"""Profile interface shared by wheels and rails.
+
+Frame and sign conventions (one profile serves both sides of the track, mirrored):
+
+- ``y`` [m] is the lateral coordinate of the profile, positive toward the **field
+  side** (away from the track centre). For the left wheel/rail this is the track's +y
+  (left); for the right wheel/rail it is the track's -y.
+- **Wheel** profiles: ``y`` is measured from the taping line (the ``S`` of EN 13715),
+  and ``height(y)`` is the radial distance outward from the taping-line circle, so the
+  local rolling radius is ``nominal_radius + height(y)`` and the flange has positive
+  height.
+- **Rail** profiles: ``y`` is measured from the rail profile origin and ``height(y)``
+  is the vertical coordinate, up, in the plane of the track (the rail inclination is
+  part of the profile). Over the domain the rail head is a graph ``z(y)``.
+
+All lengths are metres inside the library; files and the command line use mm.
+"""
+
+import abc
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike, Float
+
+
+class Profile(eqx.Module):
+    """A profile curve ``height(y)`` over the lateral domain ``[y_min, y_max]``.
+
+    Subclasses implement :meth:`height`; :meth:`slope` and :meth:`curvature` follow by
+    automatic differentiation unless a subclass overrides them. All three are pure JAX
+    functions of a scalar ``y`` [m]; vmap them for arrays.
+    """
+
+    @property
+    @abc.abstractmethod
+    def domain(self) -> tuple[float, float]:
+        """Valid lateral range ``(y_min, y_max)`` [m] (static Python floats)."""
+
+    @abc.abstractmethod
+    def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
+        """Profile height [m] at lateral coordinate ``y`` [m] (see module conventions)."""
+
+    def slope(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
+        """``d height / d y`` [-] at ``y`` [m]."""
+        return jax.grad(self.height)(jnp.asarray(y, dtype=float))
+
+    def second_derivative(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
+        """``d^2 height / d y^2`` [1/m] at ``y`` [m]."""
+        return jax.grad(self.slope)(jnp.asarray(y, dtype=float))
+
+    def curvature(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
+        """Signed curvature [1/m] of the graph ``height(y)``:
+        ``h'' / (1 + h'^2)^(3/2)``; positive where the graph bends upward."""
+        h1 = self.slope(y)
+        return self.second_derivative(y) / (1.0 + h1 * h1) ** 1.5
+
+
+class WheelProfile(eqx.Module):
+    """A wheel: its contact surfaces and nominal rolling radius.
+
+    Fields:
+        surfaces: the profile pieces searched for contact independently (static
+            tuple). A real profile has one surface; the paper's simplified profile has
+            two (tread, flange), each convex.
+        nominal_radius: rolling radius at the taping line [m] (traced parameter).
+        name: a label for plots and files (static).
+    """
+
+    surfaces: tuple[Profile, ...]
+    nominal_radius: Float[Array, ""]
+    name: str = eqx.field(static=True, default="wheel")
+
+    def rolling_radius(self, y: Float[ArrayLike, ""], surface: int = 0) -> Float[Array, ""]:
+        """Rolling radius [m] at lateral coordinate ``y`` [m] of surface ``surface``."""
+        return self.nominal_radius + self.surfaces[surface].height(y)
