@@ -1,0 +1,247 @@
+"""Kalker's creepage coefficients c11, c22, c23 of the linear theory of rolling contact.
+
+Source: Kalker (1990), *Three-dimensional elastic bodies in rolling contact*, Table E.3,
+as tabulated in CONTACT (`src/m_hertz.f90`, subroutine `linrol`) for Poisson's ratio
+nu = 0, 0.25, 0.5 and 0.1 <= a/b <= 10 (``a`` the semi-axis along the rolling direction,
+``b`` the lateral one). Linear theory, Kalker's sign convention (forces on the body,
+opposing the creepage):
+
+    Fx = -G a b c11 xi,        Fy = -G a b c22 eta - G (ab)^(3/2) c23 phi.
+
+Smoothness (differs from CONTACT on purpose). CONTACT interpolates the table linearly
+(C0) and switches to asymptotic formulas below g = min(a/b, b/a) = 0.101, where its
+coefficients jump by up to 5 %. Here, for each coefficient and each tabulated nu:
+
+- inside the table, ``log c`` is a cubic spline in ``x = log(a/b)`` through the 19 rows
+  (C2, exact at the rows);
+- outside, ``log c = log c_asym(x) + d0 exp(-p(u))``, ``u = |x - x0|`` (x0 the table
+  end), ``p(u) = s u + (s u)^2 / 2 + (u / L)^3``: CONTACT's asymptote times a correction
+  factor that decays monotonically to 1. d0 matches the value at the table end, s > 0
+  the slope, and the spline's end condition ``S''(x0) = (log c_asym)''(x0)`` together
+  with ``p'' = p'^2`` at u = 0 the curvature: C2 everywhere.
+
+Between nu values CONTACT's rule is used: 1/c is quadratic in nu through nu = 0, 0.25,
+0.5 (Lagrange). This reproduces the reference's nu = 0.28 and 0.30 columns at the rows.
+Valid for 0 <= nu <= 0.5.
+"""
+
+import math
+
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float
+
+# Table E.3 of Kalker (1990) via CONTACT `linrol`. Rows: a/b = 0.1 ... 1.0, then
+# b/a = 0.9 ... 0.1. Columns: c11 (nu = 0, .25, .5), c22 (same), c23 (same).
+_TABLE = np.array(
+    [
+        [2.51, 3.31, 4.85, 2.51, 2.52, 2.53, 0.334, 0.473, 0.731],
+        [2.59, 3.37, 4.81, 2.59, 2.63, 2.66, 0.483, 0.603, 0.809],
+        [2.68, 3.44, 4.80, 2.68, 2.75, 2.81, 0.607, 0.715, 0.889],
+        [2.78, 3.53, 4.82, 2.78, 2.88, 2.98, 0.720, 0.823, 0.977],
+        [2.88, 3.62, 4.83, 2.88, 3.01, 3.14, 0.827, 0.929, 1.07],
+        [2.98, 3.72, 4.91, 2.98, 3.14, 3.31, 0.930, 1.03, 1.18],
+        [3.09, 3.81, 4.97, 3.09, 3.28, 3.48, 1.03, 1.14, 1.29],
+        [3.19, 3.91, 5.05, 3.19, 3.41, 3.65, 1.13, 1.25, 1.40],
+        [3.29, 4.01, 5.12, 3.29, 3.54, 3.82, 1.23, 1.36, 1.51],
+        [3.40, 4.12, 5.20, 3.40, 3.67, 3.98, 1.33, 1.47, 1.63],
+        [3.51, 4.22, 5.30, 3.51, 3.81, 4.16, 1.44, 1.59, 1.77],
+        [3.65, 4.36, 5.42, 3.65, 3.99, 4.39, 1.58, 1.75, 1.94],
+        [3.82, 4.54, 5.58, 3.82, 4.21, 4.67, 1.76, 1.95, 2.18],
+        [4.06, 4.78, 5.80, 4.06, 4.50, 5.04, 2.01, 2.23, 2.50],
+        [4.37, 5.10, 6.11, 4.37, 4.90, 5.56, 2.35, 2.62, 2.96],
+        [4.84, 5.57, 6.57, 4.84, 5.48, 6.31, 2.88, 3.24, 3.70],
+        [5.57, 6.34, 7.34, 5.57, 6.40, 7.51, 3.79, 4.32, 5.01],
+        [6.96, 7.78, 8.82, 6.96, 8.14, 9.79, 5.72, 6.63, 7.89],
+        [10.7, 11.7, 12.9, 10.7, 12.8, 16.0, 12.2, 14.6, 18.0],
+    ]
+)
+TABLE_A_OVER_B = np.concatenate(
+    [np.arange(1, 11) / 10.0, 1.0 / (np.arange(9, 0, -1) / 10.0)]
+)
+"""The 19 table rows, a/b = 0.1, 0.2, ..., 1.0, 1/0.9, 1/0.8, ..., 10 (NumPy, static)."""
+TABLE_NU = np.array([0.0, 0.25, 0.5])
+"""Poisson's ratios of the table columns (NumPy, static)."""
+TABLE = _TABLE.reshape(19, 3, 3)
+"""Table values, shape (19 rows, 3 coefficients c11/c22/c23, 3 nu) (NumPy, static)."""
+
+_KAPPA = 3.0 - math.log(4.0)
+_LN16 = math.log(16.0)
+# Length [in log(a/b)] beyond which the cubic term of the correction's decay dominates.
+_DECAY_LENGTH = 1.0
+_X = np.log(TABLE_A_OVER_B)
+_X_LO, _X_HI = float(_X[0]), float(_X[-1])
+
+
+# --- asymptotes of CONTACT `linrol`, as log c and its first two x-derivatives ------------
+# x = log(a/b). Written for NumPy (setup) and jax.numpy (evaluation) alike via `xp`.
+
+
+def _asym_small(x, nu, xp):
+    """a << b (g = a/b = e^x): (log c11, log c22, log c23), each with d/dx, d2/dx2."""
+    zero = 0.0 * x
+    l11 = math.log(math.pi**2 / 4.0) - xp.log(1.0 - nu) + zero
+    l22 = math.log(math.pi**2 / 4.0) + zero + 0.0 * nu
+    m = 1.0 + nu * (_LN16 - 5.0 - x)
+    l23 = math.log(math.pi / 3.0) - xp.log(1.0 - nu) + 0.5 * x + xp.log(m)
+    d23 = 0.5 - nu / m
+    dd23 = -(nu**2) / m**2
+    return (
+        (l11, zero + 0.0 * nu, zero + 0.0 * nu),
+        (l22, zero + 0.0 * nu, zero + 0.0 * nu),
+        (l23, d23, dd23),
+    )
+
+
+def _asym_large(x, nu, xp):
+    """a >> b (g = b/a = e^-x, Lambda = ln16 + 2x): log c and derivatives, as above."""
+    lam = _LN16 + 2.0 * x
+    u = lam - 2.0 * nu  # c11 = 2 pi e^x (u + kappa) / u^2
+    l11 = math.log(2.0 * math.pi) + x + xp.log(u + _KAPPA) - 2.0 * xp.log(u)
+    d11 = 1.0 + 2.0 / (u + _KAPPA) - 4.0 / u
+    dd11 = 8.0 / u**2 - 4.0 / (u + _KAPPA) ** 2
+    w = (1.0 - nu) * lam + 2.0 * nu  # c22 = 2 pi e^x (w + (1-nu) kappa) / w^2
+    wp = 2.0 * (1.0 - nu)
+    wk = w + (1.0 - nu) * _KAPPA
+    l22 = math.log(2.0 * math.pi) + x + xp.log(wk) - 2.0 * xp.log(w)
+    d22 = 1.0 + wp / wk - 2.0 * wp / w
+    dd22 = -(wp**2) / wk**2 + 2.0 * wp**2 / w**2
+    z = (1.0 - nu) * lam - 2.0 + 4.0 * nu  # c23 = 2 pi e^(1.5 x) / (3 z)
+    l23 = math.log(2.0 * math.pi / 3.0) + 1.5 * x - xp.log(z)
+    d23 = 1.5 - wp / z
+    dd23 = wp**2 / z**2
+    return ((l11, d11, dd11), (l22, d22, dd22), (l23, d23, dd23))
+
+
+def _cubic_spline(x, y, dd_first, dd_last):
+    """Cubic spline through (x, y) with prescribed second derivatives at both ends.
+
+    Returns coefficients (n-1, 4): on [x_i, x_i+1], S = c0 + c1 t + c2 t^2 + c3 t^3,
+    t = x - x_i. Setup-time NumPy (the system is 19 x 19).
+    """
+    n = x.size
+    h = np.diff(x)
+    mat = np.zeros((n, n))
+    rhs = np.zeros(n)
+    mat[0, 0] = mat[-1, -1] = 1.0
+    rhs[0], rhs[-1] = dd_first, dd_last
+    for i in range(1, n - 1):
+        mat[i, i - 1], mat[i, i], mat[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
+        rhs[i] = 6.0 * ((y[i + 1] - y[i]) / h[i] - (y[i] - y[i - 1]) / h[i - 1])
+    m = np.linalg.solve(mat, rhs)
+    c1 = np.diff(y) / h - h * (2.0 * m[:-1] + m[1:]) / 6.0
+    c3 = np.diff(m) / (6.0 * h)
+    return np.stack([y[:-1], c1, m[:-1] / 2.0, c3], axis=1)
+
+
+def _build():
+    """Spline coefficients (9, 18, 4) and end-correction constants (9,) x 2 per side."""
+    coefs, d0_lo, d1_lo, d0_hi, d1_hi = [], [], [], [], []
+    for k in range(3):
+        for j, nu in enumerate(TABLE_NU):
+            y = np.log(TABLE[:, k, j])
+            lo = _asym_small(_X_LO, nu, np)[k]
+            hi = _asym_large(_X_HI, nu, np)[k]
+            c = _cubic_spline(_X, y, float(lo[2]), float(hi[2]))
+            h = _X[-1] - _X[-2]
+            slope_hi = c[-1, 1] + 2.0 * c[-1, 2] * h + 3.0 * c[-1, 3] * h**2
+            coefs.append(c)
+            d0_lo.append(y[0] - lo[0])
+            d1_lo.append(c[0, 1] - lo[1])
+            d0_hi.append(y[-1] - hi[0])
+            d1_hi.append(slope_hi - hi[1])
+    d0_lo, d0_hi = np.array(d0_lo), np.array(d0_hi)
+    # Decay rates in u = |x - x0| that match the slopes; all positive for this table,
+    # which makes the correction monotone (no dip below or bump above the asymptote).
+    s_lo = np.array(d1_lo) / d0_lo
+    s_hi = -np.array(d1_hi) / d0_hi
+    assert np.all(s_lo > 0.0) and np.all(s_hi > 0.0)
+    return np.array(coefs), d0_lo, s_lo, d0_hi, s_hi
+
+
+_COEFS, _D0_LO, _S_LO, _D0_HI, _S_HI = _build()
+
+
+def _decay(u, s):
+    """exp(-p(u)), p = s u + (s u)^2/2 + (u/L)^3: slope -s and zero curvature at u = 0."""
+    su = s * u
+    return jnp.exp(-(su + 0.5 * su * su + (u / _DECAY_LENGTH) ** 3))
+
+
+def _log_columns(x: Float[Array, ""]) -> Float[Array, "9"]:
+    """log c for the 9 table columns (c11, c22, c23 at nu = 0, .25, .5) at x = log(a/b)."""
+    f64 = jnp.float64
+    knots = jnp.asarray(_X, dtype=f64)
+    coefs = jnp.asarray(_COEFS, dtype=f64)
+    nu3 = jnp.asarray(TABLE_NU, dtype=f64)
+
+    # Table range: spline. x is clipped so the unused branches stay finite (and so do
+    # their gradients, which `where` multiplies by zero).
+    xs = jnp.clip(x, _X_LO, _X_HI)
+    i = jnp.clip(jnp.searchsorted(knots, xs, side="right") - 1, 0, knots.size - 2)
+    t = xs - knots[i]
+    c = coefs[:, i, :]
+    spline = c[:, 0] + t * (c[:, 1] + t * (c[:, 2] + t * c[:, 3]))
+
+    x_lo = jnp.minimum(x, _X_LO)
+    a_lo = jnp.concatenate([col[0] for col in _asym_small(x_lo, nu3, jnp)])
+    corr_lo = jnp.asarray(_D0_LO, dtype=f64) * _decay(
+        _X_LO - x_lo, jnp.asarray(_S_LO, dtype=f64)
+    )
+
+    x_hi = jnp.maximum(x, _X_HI)
+    a_hi = jnp.concatenate([col[0] for col in _asym_large(x_hi, nu3, jnp)])
+    corr_hi = jnp.asarray(_D0_HI, dtype=f64) * _decay(
+        x_hi - _X_HI, jnp.asarray(_S_HI, dtype=f64)
+    )
+
+    return jnp.where(x < _X_LO, a_lo + corr_lo, jnp.where(x > _X_HI, a_hi + corr_hi, spline))
+
+
+def _nu_weights(nu):
+    """Lagrange weights of 1/c at nu = 0, 0.25, 0.5 (CONTACT's interpolation)."""
+    return jnp.stack(
+        [8.0 * (nu - 0.25) * (nu - 0.5), -16.0 * (nu - 0.5) * nu, 8.0 * nu * (nu - 0.25)]
+    )
+
+
+@jnp.vectorize
+def _kalker(a_over_b, nu):
+    x = jnp.log(a_over_b)
+    inv_c = jnp.exp(-_log_columns(x)).reshape(3, 3)  # (coefficient, nu)
+    inv = inv_c @ _nu_weights(nu)
+    return jnp.stack(1.0 / inv)
+
+
+def kalker_coefficients(
+    a_over_b: Float[ArrayLike, "*batch"], nu: Float[ArrayLike, "*batch"]
+) -> tuple[Float[Array, "*batch"], Float[Array, "*batch"], Float[Array, "*batch"]]:
+    """Kalker's linear creepage coefficients ``(c11, c22, c23)`` [-].
+
+    **Arguments:**
+
+    - `a_over_b`: ratio of the contact-ellipse semi-axes, ``a`` along the rolling
+      direction over ``b`` lateral [-], > 0. Any positive value: the table covers
+      0.1 ... 10, beyond it the coefficients join CONTACT's asymptotes smoothly.
+    - `nu`: Poisson's ratio [-], 0 <= nu <= 0.5 (combined value of the two bodies).
+
+    Arguments broadcast against each other; results have the broadcast shape.
+    C2-smooth in ``a/b`` and polynomial in ``nu`` (see the module docstring), so
+    jit/vmap/grad-safe. The table rows are reproduced exactly.
+    """
+    a_over_b = jnp.asarray(a_over_b, dtype=jnp.float64)
+    nu = jnp.asarray(nu, dtype=jnp.float64)
+    out = _kalker(a_over_b, nu)
+    return out[..., 0], out[..., 1], out[..., 2]
+
+
+def kalker_asymptotes(
+    a_over_b: Float[ArrayLike, ""], nu: Float[ArrayLike, ""]
+) -> tuple[Float[Array, ""], Float[Array, ""], Float[Array, ""]]:
+    """CONTACT's asymptotic ``(c11, c22, c23)`` for ``a/b -> 0`` (if a/b < 1) or
+    ``a/b -> infinity`` (if a/b >= 1). For comparison and plots; scalar arguments."""
+    x = jnp.log(jnp.asarray(a_over_b, dtype=jnp.float64))
+    nu = jnp.asarray(nu, dtype=jnp.float64)
+    lo = _asym_small(jnp.minimum(x, 0.0), nu, jnp)
+    hi = _asym_large(jnp.maximum(x, 0.0), nu, jnp)
+    return tuple(jnp.exp(jnp.where(x < 0.0, lo[k][0], hi[k][0])) for k in range(3))
