@@ -1,0 +1,15 @@
+"""Wheel and rail profiles (conventions in :mod:`jaxrail.profiles._base`)."""
+
+from ._base import Profile as Profile
+from ._base import WheelProfile as WheelProfile
+from .files import read_profile as read_profile
+from .files import sample_profile as sample_profile
+from .files import write_profile_csv as write_profile_csv
+from .s1002 import S1002 as S1002
+from .s1002 import s1002 as s1002
+from .simplified import SimplifiedFlange as SimplifiedFlange
+from .simplified import SimplifiedTread as SimplifiedTread
+from .simplified import simplified_s1002 as simplified_s1002
+from .tabulated import TabulatedProfile as TabulatedProfile
+from .tabulated import tabulated_rail as tabulated_rail
+from .tabulated import tabulated_wheel as tabulated_wheel
