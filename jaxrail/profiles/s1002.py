@@ -63,59 +63,18 @@ SECTION_JOINTS_MM = (32.15796, -26.0, -35.0, -38.426669071, -39.764473993,
 FLANGE_BACK_MM = -70.0
 S1002_DOMAIN = (-0.0695, 0.060)
 
-# Smallest argument a square root is allowed to see [mm^2]. Sections are evaluated
-# everywhere (and then selected), so a circle is evaluated beyond its own ends; the floor
-# keeps its value and its derivatives finite there. Inside its own range every arc has
-# an argument >= 20 mm^2, so the floor never touches a selected value in the domain.
+# Smallest argument a square root is allowed to see [mm^2]. A section's formula is only
+# evaluated with that section's coefficients, but a circle is also evaluated beyond its own
+# ends outside the domain (and a line section carries a zero-weight circle term). The
+# floor keeps values and derivatives finite there. Inside its own range every arc has an
+# argument >= 20 mm^2, so the floor never changes a value in the domain.
 _SQRT_FLOOR = 1e-12
 
 
-def _safe_sqrt(a):
-    return jnp.sqrt(jnp.where(a > _SQRT_FLOOR, a, _SQRT_FLOOR))
-
-
-def _horner(coefficients, s):
-    out = jnp.zeros_like(s) + coefficients[-1]
-    for c in coefficients[-2::-1]:
-        out = out * s + c
-    return out
-
-
-def _section_a(s):
-    return _AA - _BA * s
-
-
-def _section_b(s):
-    return _horner(_B_POLY, s)
-
-
-def _section_c_raw(s):
-    return _horner(_C_POLY, s)
-
-
-def _section_d(s):
-    return _AD - _safe_sqrt(_BD**2 - (s + _CD) ** 2)
-
-
-def _section_e(s):
-    return -_AE - _BE * s
-
-
-def _section_f(s):
-    return _AF + _safe_sqrt(_BF**2 - (s + _CF) ** 2)
-
-
-def _section_g(s):
-    return _AG + _safe_sqrt(_BG**2 - (s + _CG) ** 2)
-
-
-def _section_h(s):
-    return _AH + _safe_sqrt(_BH**2 - (s + _CH) ** 2)
-
-
-def _c_correction_coefficients() -> tuple[float, ...]:
-    """Quintic p(t), t = (S + 35)/9 in [0, 1], added to section C so that it meets D at
-    t = 0 and B at t = 1 in value and slope, with p'' = 0 at both ends (numpy, import)."""
+def _c_correction_coefficients() -> np.ndarray:
+    """Quintic p(S) added to section C so that it meets D at S = -35 and B at S = -26 in
+    value and slope, with p'' = 0 at both ends. Monomial coefficients in S (numpy, at
+    import), from the Hermite conditions written in t = (S + 35)/9 for conditioning."""
     b_poly = np.polynomial.Polynomial(_B_POLY)
     c_poly = np.polynomial.Polynomial(_C_POLY)
     s0, s1 = -35.0, -26.0
@@ -133,31 +92,62 @@ def _c_correction_coefficients() -> tuple[float, ...]:
         rows.append([t**k for k in range(6)])
         rows.append([k * t ** (k - 1) if k >= 1 else 0.0 for k in range(6)])
         rows.append([k * (k - 1) * t ** (k - 2) if k >= 2 else 0.0 for k in range(6)])
-    coefficients = np.linalg.solve(np.array(rows), rhs)
-    return tuple(float(c) for c in coefficients)
+    in_t = np.polynomial.Polynomial(np.linalg.solve(np.array(rows), rhs))
+    # p(S) = p_t((S - s0) / length)
+    return in_t(np.polynomial.Polynomial([-s0 / length, 1.0 / length])).coef
 
 
 _C_CORRECTION = _c_correction_coefficients()
 
+# Every section is written as  F = polynomial(S) + w * sqrt(r^2 - (S + c)^2)  [mm], one row
+# per section, so that the height is one Horner evaluation and one square root with the
+# row picked by the section index (cheap to compile, no branch to differentiate).
+_DEGREE = len(_B_POLY) - 1
 
-def _section_c(s):
-    return _section_c_raw(s) + _horner(_C_CORRECTION, (s + 35.0) / 9.0)
+
+def _row(poly=(0.0,), weight=0.0, radius=0.0, centre=0.0):
+    padded = np.zeros(_DEGREE + 1)
+    padded[: len(poly)] = poly
+    return padded, (weight, radius**2, centre)
+
+
+SECTION_ROWS = {
+    "A": _row((_AA, -_BA)),
+    "B": _row(_B_POLY),
+    "C": _row(np.polynomial.polynomial.polyadd(_C_POLY, _C_CORRECTION)),
+    "D": _row((_AD,), -1.0, _BD, _CD),
+    "E": _row((-_AE, -_BE)),
+    "F": _row((_AF,), 1.0, _BF, _CF),
+    "G": _row((_AG,), 1.0, _BG, _CG),
+    "H": _row((_AH,), 1.0, _BH, _CH),
+}
+
+
+def piecewise_height_mm(s, joints_ascending, rows):
+    """Height [mm] at ``s`` [mm] of a profile made of ``rows`` (section rows in increasing
+    S) separated by ``joints_ascending`` [mm]. At a joint the lower section is used; the
+    sections meet there in value and slope, so the choice does not matter."""
+    poly = jnp.asarray(np.stack([r[0] for r in rows]), dtype=jnp.float64)
+    arc = jnp.asarray(np.stack([r[1] for r in rows]), dtype=jnp.float64)
+    index = jnp.searchsorted(jnp.asarray(joints_ascending, dtype=jnp.float64), s)
+    coefficients, (weight, radius_sq, centre) = poly[index], arc[index]
+    value = coefficients[_DEGREE]
+    for k in range(_DEGREE - 1, -1, -1):
+        value = value * s + coefficients[k]
+    argument = radius_sq - (s + centre) ** 2
+    return value + weight * jnp.sqrt(jnp.where(argument > _SQRT_FLOOR, argument, _SQRT_FLOOR))
 
 
 # Sections in increasing S (H .. A) and the joints between them, increasing.
-_SECTIONS_ASCENDING = (_section_h, _section_g, _section_f, _section_e, _section_d,
-                       _section_c, _section_b, _section_a)
+_ROWS_ASCENDING = tuple(SECTION_ROWS[k] for k in "HGFEDCBA")
 _JOINTS_ASCENDING = tuple(sorted(SECTION_JOINTS_MM))
 
 
 def s1002_height_mm(s_mm: Float[ArrayLike, ""]) -> Float[Array, ""]:
     """S1002 height ``F`` [mm] at lateral position ``S`` [mm] (scalar), smoothed as the
-    module docstring says. Every section is evaluated with safe arguments and one is
-    picked by index, so gradients are finite everywhere."""
+    module docstring says. Gradients are finite everywhere."""
     s = jnp.asarray(s_mm, dtype=jnp.float64)
-    index = jnp.searchsorted(jnp.asarray(_JOINTS_ASCENDING, dtype=jnp.float64), s)
-    values = jnp.stack([section(s) for section in _SECTIONS_ASCENDING])
-    return values[index]
+    return piecewise_height_mm(s, _JOINTS_ASCENDING, _ROWS_ASCENDING)
 
 
 class S1002(Profile):

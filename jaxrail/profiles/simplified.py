@@ -31,17 +31,14 @@ from jaxtyping import Array, ArrayLike, Float
 from .._float64 import require_float64
 from ._base import Profile, WheelProfile
 from .s1002 import (
+    _AE,
     _B_POLY,
     _BE,
-    _AE,
     S1002_DOMAIN,
     SECTION_JOINTS_MM,
-    _section_a,
-    _section_b,
-    _section_e,
-    _section_f,
-    _section_g,
-    _section_h,
+    SECTION_ROWS,
+    _row,
+    piecewise_height_mm,
 )
 
 _AB_JOINT, _TREAD_END, _, _FLANK_TOP, _EF_JOINT, _FG_JOINT, _GH_JOINT = SECTION_JOINTS_MM
@@ -58,19 +55,21 @@ SPLIT_MM = float((-_AE - _TREAD_END_HEIGHT + _TREAD_END_SLOPE * _TREAD_END)
 TREAD_DOMAIN = (1e-3 * SPLIT_MM, S1002_DOMAIN[1])
 FLANGE_DOMAIN = (S1002_DOMAIN[0], 1e-3 * SPLIT_MM)
 
+# Sections in increasing S. The tread: tangent line, B, A. The flange: H, G, F, and E,
+# which runs on past its S1002 end toward the tread.
+_TANGENT_ROW = _row((_TREAD_END_HEIGHT - _TREAD_END_SLOPE * _TREAD_END, _TREAD_END_SLOPE))
+_TREAD_ROWS = (_TANGENT_ROW, SECTION_ROWS["B"], SECTION_ROWS["A"])
+_TREAD_JOINTS = (_TREAD_END, _AB_JOINT)
+_FLANGE_ROWS = tuple(SECTION_ROWS[k] for k in "HGFE")
+_FLANGE_JOINTS = (_GH_JOINT, _FG_JOINT, _EF_JOINT)
+
 
 def _tread_mm(s):
-    line = _TREAD_END_HEIGHT + _TREAD_END_SLOPE * (s - _TREAD_END)
-    # index 0: continuation line, 1: B, 2: A
-    index = jnp.searchsorted(jnp.asarray((_TREAD_END, _AB_JOINT), dtype=jnp.float64), s)
-    return jnp.stack([line, _section_b(s), _section_a(s)])[index]
+    return piecewise_height_mm(s, _TREAD_JOINTS, _TREAD_ROWS)
 
 
 def _flange_mm(s):
-    # index 0: H, 1: G, 2: F, 3: E continued toward the tread
-    joints = jnp.asarray((_GH_JOINT, _FG_JOINT, _EF_JOINT), dtype=jnp.float64)
-    index = jnp.searchsorted(joints, s)
-    return jnp.stack([_section_h(s), _section_g(s), _section_f(s), _section_e(s)])[index]
+    return piecewise_height_mm(s, _FLANGE_JOINTS, _FLANGE_ROWS)
 
 
 class SimplifiedTread(Profile):
