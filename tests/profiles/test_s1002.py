@@ -22,23 +22,27 @@ PROFILE = S1002()
 GRID = 4096  # every vector evaluation is padded to this length: one compile per function
 
 
-def _vector(fn):
-    compiled = jax.jit(jax.vmap(fn))
 
+
+def _all_at(y):
+    return (PROFILE.height(y), PROFILE.slope(y), PROFILE.second_derivative(y),
+            PROFILE.curvature(y), jax.grad(PROFILE.curvature)(y))
+
+
+_COMPILED = jax.jit(jax.vmap(_all_at))  # one compile for all five
+
+
+def _pick(index):
     def evaluate(y):
         y = np.atleast_1d(np.asarray(y, dtype=float))
         padded = np.full(GRID, y[0])
         padded[: y.size] = y
-        return np.asarray(compiled(padded))[: y.size]
+        return np.asarray(_COMPILED(padded)[index])[: y.size]
 
     return evaluate
 
 
-HEIGHT = _vector(PROFILE.height)
-SLOPE = _vector(PROFILE.slope)
-SECOND = _vector(PROFILE.second_derivative)
-CURVATURE = _vector(PROFILE.curvature)
-D_CURVATURE = _vector(jax.grad(PROFILE.curvature))
+HEIGHT, SLOPE, SECOND, CURVATURE, D_CURVATURE = (_pick(i) for i in range(5))
 # scalar versions for root finding
 height_at = jax.jit(PROFILE.height)
 slope_at = jax.jit(PROFILE.slope)
