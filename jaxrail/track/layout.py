@@ -25,6 +25,7 @@ differentiable with respect to lengths, radii and cants. Checks that need values
 traced ones; structural checks always run.
 """
 
+import functools
 from collections.abc import Sequence
 
 import equinox as eqx
@@ -149,62 +150,70 @@ class Track(eqx.Module):
             raise ValueError(f"rail_centre_distance must be > 0 m, got {base_value}")
 
         n = len(segments)
-        kappa, cant = [], []  # constant values of Straight/Arc; None for transitions
         for i, seg in enumerate(segments):
-            k, c = _check_segment(i, seg, n, segments, base_value)
-            kappa.append(k)
-            cant.append(c)
+            _check_segment(i, seg, n, segments, base_value)
         _check_joints(segments, allow_curvature_jumps)
 
+        kinds = tuple(_kind(seg) for seg in segments)
+        one = jnp.ones((), dtype=jnp.float64)
         zero = jnp.zeros((), dtype=jnp.float64)
-        lengths = jnp.stack([_scalar(seg.length, f"segments[{i}].length") for i, seg in enumerate(segments)])
-        k0, k_rate, e0, e_rate = [], [], [], []
-        for i, seg in enumerate(segments):
-            if isinstance(seg, Transition):
-                k0.append(kappa[i - 1])
-                k_rate.append((kappa[i + 1] - kappa[i - 1]) / lengths[i])
-                e0.append(cant[i - 1])
-                e_rate.append((cant[i + 1] - cant[i - 1]) / lengths[i])
-            else:
-                k0.append(kappa[i])
-                k_rate.append(zero)
-                e0.append(cant[i])
-                e_rate.append(zero)
-        k0, k_rate = jnp.stack(k0), jnp.stack(k_rate)
-        e0, e_rate = jnp.stack(e0), jnp.stack(e_rate)
+        lengths = jnp.stack([_scalar(seg.length, "length") for seg in segments])
+        radii = jnp.stack([_scalar(seg.radius, "radius") if isinstance(seg, Arc) else one for seg in segments])
+        cants = jnp.stack([_scalar(seg.cant, "cant") if isinstance(seg, Arc) else zero for seg in segments])
+        signs = tuple(_direction_sign(seg) if isinstance(seg, Arc) else 0.0 for seg in segments)
+        start = jnp.stack([_scalar(v, "start") for v in start])
+        arrays = _assemble(lengths, radii, cants, start, kinds, signs, samples_per_segment)
+        return cls(**arrays, rail_centre_distance=base, kinds=kinds)
 
-        x0, y0, h0 = (_scalar(v, "start") for v in start)
-        seg_start = jnp.concatenate([zero[None], jnp.cumsum(lengths)[:-1]])
-        dh = local_heading(zero, k0, k_rate, lengths)
-        h_start = h0 + jnp.concatenate([zero[None], jnp.cumsum(dh)[:-1]])
-        dx, dy = jax.vmap(local_offset)(h_start, k0, k_rate, lengths)
-        x_start = x0 + jnp.concatenate([zero[None], jnp.cumsum(dx)[:-1]])
-        y_start = y0 + jnp.concatenate([zero[None], jnp.cumsum(dy)[:-1]])
 
-        # Coarse samples (k + 1 per segment, ends included) for the projection guess.
-        frac = jnp.linspace(0.0, 1.0, samples_per_segment + 1, dtype=jnp.float64)
-        sigma = lengths[:, None] * frac[None, :]
-        offsets = jax.vmap(jax.vmap(local_offset, (None, None, None, 0)))
-        sx, sy = offsets(h_start, k0, k_rate, sigma)
-        sample_s = (seg_start[:, None] + sigma).reshape(-1)
-        sample_xy = jnp.stack(
-            [(x_start[:, None] + sx).reshape(-1), (y_start[:, None] + sy).reshape(-1)], axis=1
-        )
-        return cls(
-            segment_start=seg_start,
-            segment_length=lengths,
-            x_start=x_start,
-            y_start=y_start,
-            heading_start=h_start,
-            curvature_start=k0,
-            curvature_rate=k_rate,
-            superelevation_start=e0,
-            superelevation_rate=e_rate,
-            rail_centre_distance=base,
-            sample_s=sample_s,
-            sample_xy=sample_xy,
-            kinds=tuple(_kind(seg) for seg in segments),
-        )
+@functools.partial(jax.jit, static_argnums=(4, 5, 6))
+def _assemble(lengths, radii, cants, start, kinds, signs, samples_per_segment):
+    """Per-segment arrays of a validated layout (jitted: eager building stays fast;
+    inside an outer jit or grad it is simply inlined)."""
+    n = len(kinds)
+    is_arc = np.array([k == "arc" for k in kinds])
+    sign = np.array(signs)
+    # Constant curvature and signed cant of straights and arcs (placeholders for
+    # transitions, which take their neighbours' values below).
+    kappa_c = jnp.where(is_arc, sign / radii, 0.0)
+    cant_c = jnp.where(is_arc, sign * cants, 0.0)
+    is_tr = np.array([k == "transition" for k in kinds])
+    prev = np.clip(np.arange(n) - 1, 0, n - 1)
+    nxt = np.clip(np.arange(n) + 1, 0, n - 1)
+    k0 = jnp.where(is_tr, kappa_c[prev], kappa_c)
+    k_rate = jnp.where(is_tr, (kappa_c[nxt] - kappa_c[prev]) / lengths, 0.0)
+    e0 = jnp.where(is_tr, cant_c[prev], cant_c)
+    e_rate = jnp.where(is_tr, (cant_c[nxt] - cant_c[prev]) / lengths, 0.0)
+
+    zero = jnp.zeros((1,), dtype=jnp.float64)
+    seg_start = jnp.concatenate([zero, jnp.cumsum(lengths)[:-1]])
+    dh = local_heading(0.0, k0, k_rate, lengths)
+    h_start = start[2] + jnp.concatenate([zero, jnp.cumsum(dh)[:-1]])
+    dx, dy = jax.vmap(local_offset)(h_start, k0, k_rate, lengths)
+    x_start = start[0] + jnp.concatenate([zero, jnp.cumsum(dx)[:-1]])
+    y_start = start[1] + jnp.concatenate([zero, jnp.cumsum(dy)[:-1]])
+
+    # Coarse samples (k + 1 per segment, ends included) for the projection guess.
+    frac = jnp.linspace(0.0, 1.0, samples_per_segment + 1, dtype=jnp.float64)
+    sigma = lengths[:, None] * frac[None, :]
+    offsets = jax.vmap(jax.vmap(local_offset, (None, None, None, 0)))
+    sx, sy = offsets(h_start, k0, k_rate, sigma)
+    sample_xy = jnp.stack(
+        [(x_start[:, None] + sx).reshape(-1), (y_start[:, None] + sy).reshape(-1)], axis=1
+    )
+    return dict(
+        segment_start=seg_start,
+        segment_length=lengths,
+        x_start=x_start,
+        y_start=y_start,
+        heading_start=h_start,
+        curvature_start=k0,
+        curvature_rate=k_rate,
+        superelevation_start=e0,
+        superelevation_rate=e_rate,
+        sample_s=(seg_start[:, None] + sigma).reshape(-1),
+        sample_xy=sample_xy,
+    )
 
 
 def _kind(seg) -> str:
@@ -230,7 +239,7 @@ def _direction_sign(seg: Arc) -> float:
 
 
 def _check_segment(i, seg, n, segments, base_value):
-    """Validate segment ``i``; return its (curvature, signed cant) or (None, None)."""
+    """Validate segment ``i`` (structure always; values when concrete)."""
     if not isinstance(seg, (Straight, Arc, Transition)):
         raise TypeError(
             f"segments[{i}] must be Straight, Arc or Transition, got {type(seg).__name__}"
@@ -240,8 +249,7 @@ def _check_segment(i, seg, n, segments, base_value):
     if length is not None and not length > 0.0:
         raise ValueError(f"{name}: length must be > 0 m, got {length}")
     if isinstance(seg, Straight):
-        zero = jnp.zeros((), dtype=jnp.float64)
-        return zero, zero
+        return
     if isinstance(seg, Transition):
         if i == 0 or i == n - 1:
             where = "start" if i == 0 else "end"
@@ -255,7 +263,7 @@ def _check_segment(i, seg, n, segments, base_value):
                     f"{name}: neighbour segments[{j}] is also a Transition; a transition "
                     "needs a Straight or Arc on both sides"
                 )
-        return None, None
+        return
     if seg.direction not in ("left", "right"):
         raise ValueError(
             f"{name}: unknown direction {seg.direction!r}; use 'left' or 'right'"
@@ -270,8 +278,6 @@ def _check_segment(i, seg, n, segments, base_value):
         raise ValueError(
             f"{name}: |cant| must be < rail_centre_distance = {base_value} m, got {c}"
         )
-    sign = _direction_sign(seg)
-    return sign / radius, sign * cant
 
 
 def _joint_values(seg):
