@@ -168,36 +168,6 @@ def _decay(u, s):
     return jnp.exp(-(su + 0.5 * su * su + (u / _DECAY_LENGTH) ** 3))
 
 
-def _log_columns(x: Float[Array, ""]) -> Float[Array, "9"]:
-    """log c for the 9 table columns (c11, c22, c23 at nu = 0, .25, .5) at x = log(a/b)."""
-    f64 = jnp.float64
-    knots = jnp.asarray(_X, dtype=f64)
-    coefs = jnp.asarray(_COEFS, dtype=f64)
-    nu3 = jnp.asarray(TABLE_NU, dtype=f64)
-
-    # Table range: spline. x is clipped so the unused branches stay finite (and so do
-    # their gradients, which `where` multiplies by zero).
-    xs = jnp.clip(x, _X_LO, _X_HI)
-    i = jnp.clip(jnp.searchsorted(knots, xs, side="right") - 1, 0, knots.size - 2)
-    t = xs - knots[i]
-    c = coefs[:, i, :]
-    spline = c[:, 0] + t * (c[:, 1] + t * (c[:, 2] + t * c[:, 3]))
-
-    x_lo = jnp.minimum(x, _X_LO)
-    a_lo = jnp.concatenate([col[0] for col in _asym_small(x_lo, nu3, jnp)])
-    corr_lo = jnp.asarray(_D0_LO, dtype=f64) * _decay(
-        _X_LO - x_lo, jnp.asarray(_S_LO, dtype=f64)
-    )
-
-    x_hi = jnp.maximum(x, _X_HI)
-    a_hi = jnp.concatenate([col[0] for col in _asym_large(x_hi, nu3, jnp)])
-    corr_hi = jnp.asarray(_D0_HI, dtype=f64) * _decay(
-        x_hi - _X_HI, jnp.asarray(_S_HI, dtype=f64)
-    )
-
-    return jnp.where(x < _X_LO, a_lo + corr_lo, jnp.where(x > _X_HI, a_hi + corr_hi, spline))
-
-
 def _nu_weights(nu):
     """Lagrange weights of 1/c at nu = 0, 0.25, 0.5 (CONTACT's interpolation)."""
     return jnp.stack(
@@ -205,12 +175,55 @@ def _nu_weights(nu):
     )
 
 
+def _log_nu_interp(log_cols, weights):
+    """log c at nu from log c at nu = 0, .25, .5 (rows: c11, c22, c23), quadratic in 1/c."""
+    return -jnp.log(jnp.exp(-log_cols).reshape(3, 3) @ weights)
+
+
 @jnp.vectorize
-def _kalker(a_over_b, nu):
+def _log_kalker(a_over_b, nu):
+    """(log c11, log c22, log c23) at one a/b > 0 and one nu."""
+    f64 = jnp.float64
     x = jnp.log(a_over_b)
-    inv_c = jnp.exp(-_log_columns(x)).reshape(3, 3)  # (coefficient, nu)
-    inv = inv_c @ _nu_weights(nu)
-    return jnp.stack(1.0 / inv)
+    nu3 = jnp.asarray(TABLE_NU, dtype=f64)
+
+    # Each branch sees x clamped to its own range, so the unused branches stay finite
+    # (and so do their gradients, which `where` multiplies by zero). Clamping by `where`,
+    # not clip/min/max, which pass only half the gradient when x sits on the bound.
+    below, above = x < _X_LO, x > _X_HI
+    xs = jnp.where(below, _X_LO, jnp.where(above, _X_HI, x))
+    x_lo = jnp.where(below, x, _X_LO)
+    x_hi = jnp.where(above, x, _X_HI)
+
+    # The 9 table columns (c11, c22, c23 at nu = 0, .25, .5): spline inside the table,
+    # corrected asymptote outside.
+    knots = jnp.asarray(_X[1:-1], dtype=f64)
+    i = jnp.sum(xs >= knots)  # interval index, 0 ... 17 (no search loop to compile)
+    t = xs - jnp.asarray(_X, dtype=f64)[i]
+    c = jnp.asarray(_COEFS, dtype=f64)[:, i, :]
+    spline = c[:, 0] + t * (c[:, 1] + t * (c[:, 2] + t * c[:, 3]))
+    a_lo = jnp.concatenate([col[0] for col in _asym_small(x_lo, nu3, jnp)])
+    a_hi = jnp.concatenate([col[0] for col in _asym_large(x_hi, nu3, jnp)])
+    corr_lo = jnp.asarray(_D0_LO, dtype=f64) * _decay(_X_LO - x_lo, jnp.asarray(_S_LO, dtype=f64))
+    corr_hi = jnp.asarray(_D0_HI, dtype=f64) * _decay(x_hi - _X_HI, jnp.asarray(_S_HI, dtype=f64))
+    columns = jnp.where(below, a_lo + corr_lo, jnp.where(above, a_hi + corr_hi, spline))
+
+    weights = _nu_weights(nu)
+    log_c = _log_nu_interp(columns, weights)
+
+    # Outside the table, blend from the nu-interpolated columns to the asymptote at the
+    # actual nu (the asymptotes are not quadratic in 1/c in nu: c23 would be 5 % off).
+    # The blend factor 1 - exp(-u^3) is flat to second order at the table end (C2) and
+    # leaves nu = 0, .25, .5 unchanged (there the two asymptote terms cancel).
+    a_cols = jnp.where(below, a_lo, a_hi)
+    a_nu = jnp.where(
+        below,
+        jnp.stack([col[0] for col in _asym_small(x_lo, nu, jnp)]),
+        jnp.stack([col[0] for col in _asym_large(x_hi, nu, jnp)]),
+    )
+    u = (x_hi - _X_HI) + (_X_LO - x_lo)  # distance outside the table, 0 inside
+    blend = 1.0 - jnp.exp(-(u**3))
+    return log_c + blend * (a_nu - _log_nu_interp(a_cols, weights))
 
 
 def kalker_coefficients(
@@ -231,7 +244,7 @@ def kalker_coefficients(
     """
     a_over_b = jnp.asarray(a_over_b, dtype=jnp.float64)
     nu = jnp.asarray(nu, dtype=jnp.float64)
-    out = _kalker(a_over_b, nu)
+    out = jnp.exp(_log_kalker(a_over_b, nu))
     return out[..., 0], out[..., 1], out[..., 2]
 
 
@@ -242,6 +255,6 @@ def kalker_asymptotes(
     ``a/b -> infinity`` (if a/b >= 1). For comparison and plots; scalar arguments."""
     x = jnp.log(jnp.asarray(a_over_b, dtype=jnp.float64))
     nu = jnp.asarray(nu, dtype=jnp.float64)
-    lo = _asym_small(jnp.minimum(x, 0.0), nu, jnp)
-    hi = _asym_large(jnp.maximum(x, 0.0), nu, jnp)
+    lo = _asym_small(jnp.where(x < 0.0, x, 0.0), nu, jnp)
+    hi = _asym_large(jnp.where(x < 0.0, 0.0, x), nu, jnp)
     return tuple(jnp.exp(jnp.where(x < 0.0, lo[k][0], hi[k][0])) for k in range(3))
