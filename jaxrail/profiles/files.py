@@ -263,6 +263,12 @@ def write_profile_csv(
         raise
 
 
+@jax.jit
+def _heights(profile: Profile, y):
+    # the profile is an argument: one compile per profile type, knot count and n
+    return jax.vmap(profile.height)(y)
+
+
 def sample_profile(
     profile: Profile | WheelProfile,
     n: int = 401,
@@ -295,6 +301,6 @@ def sample_profile(
     for s in surfaces:
         free = np.isnan(z) & (y >= s.domain[0]) & (y <= s.domain[1])
         if free.any():
-            z[free] = np.asarray(jax.vmap(s.height)(jnp.asarray(y[free], dtype=jnp.float64)))
+            z[free] = np.asarray(_heights(s, jnp.asarray(y, dtype=jnp.float64)))[free]
     keep = ~np.isnan(z)
     return 1e3 * y[keep], 1e3 * z[keep]
