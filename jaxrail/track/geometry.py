@@ -75,7 +75,8 @@ def _locate(track: "Track", s):
     s = jnp.asarray(s, dtype=jnp.float64)
     if s.ndim != 0:
         raise ValueError(f"s must be a scalar arc length, got shape {s.shape}; use jax.vmap")
-    i = jnp.searchsorted(track.segment_start, s, side="right") - 1
+    # compare_all: no loop (cheap to compile and vmap) for the few tens of segments.
+    i = jnp.searchsorted(track.segment_start, s, side="right", method="compare_all") - 1
     i = jnp.clip(i, 0, track.n_segments - 1)
     return i, s - track.segment_start[i]
 
