@@ -82,15 +82,22 @@ def _uncanted_field_side():
 
 _HEAD = _uncanted_field_side()
 
-# Pieces from the gauge side to the field side.
+# Pieces from the gauge side to the field side, as constant tables of the uncanted
+# head (rotated as whole arrays: few operations to trace, differentiate and compile).
 _PIECES = ("flank", "corner", "side", "crown", "side", "corner", "flank")
 _IS_LINE = np.array([name == "flank" for name in _PIECES])
 _RADII = np.array([CORNER_RADIUS, CORNER_RADIUS, SIDE_RADIUS, CROWN_RADIUS, SIDE_RADIUS,
                    CORNER_RADIUS, CORNER_RADIUS])  # flanks carry their neighbour's (unused)
-
-
-def _mirror(p):
-    return np.array([-p[0], p[1]])
+_GAUGE = np.array([-1.0, 1.0])  # mirror a field-side point to the gauge side
+_JOINTS = np.array([_GAUGE * _HEAD["joints"][2], _GAUGE * _HEAD["joints"][1],
+                    _GAUGE * _HEAD["joints"][0], *_HEAD["joints"]])  # (6, 2)
+_CENTRES = np.array([_GAUGE * _HEAD["corner_centre"], _GAUGE * _HEAD["corner_centre"],
+                     _GAUGE * _HEAD["side_centre"], _HEAD["crown_centre"],
+                     _HEAD["side_centre"], _HEAD["corner_centre"], _HEAD["corner_centre"]])
+# Line direction of each piece (flanks only; circles get a harmless horizontal one) and
+# the joint each line passes through.
+_DIRECTIONS = np.array([_GAUGE * _HEAD["flank_down"]] + [[1.0, 0.0]] * 5 + [_HEAD["flank_down"]])
+_LINE_JOINT = np.array([0, 0, 0, 0, 0, 0, 5])
 
 
 def _canted_pieces(xp, theta):
@@ -102,39 +109,19 @@ def _canted_pieces(xp, theta):
     """
     c, s = xp.cos(theta), xp.sin(theta)
 
-    def rot(p):
-        return c * p[0] - s * p[1], s * p[0] + c * p[1]
+    def rot(points):
+        y, z = points[:, 0], points[:, 1]
+        return c * y - s * z, s * y + c * z
 
-    j1, j2, j3 = _HEAD["joints"]
-    joints = [_mirror(j3), _mirror(j2), _mirror(j1), j1, j2, j3]
-    jy, jz = zip(*[rot(p) for p in joints])
-    centres = [_HEAD["corner_centre"], _HEAD["corner_centre"], _HEAD["side_centre"],
-               _HEAD["crown_centre"], _HEAD["side_centre"], _HEAD["corner_centre"],
-               _HEAD["corner_centre"]]
-    centres = [_mirror(p) if k < 3 else p for k, p in enumerate(centres)]
-    cy, cz = zip(*[rot(p) for p in centres])
-
-    def line_slope(direction):
-        dy, dz = rot(direction)
-        # The gauge flank turns vertical at 1:20; it lies outside the domain there,
-        # but its slope must stay finite for gradient-safe selection.
-        ok = xp.abs(dy) > 1e-12
-        return xp.where(ok, dz / xp.where(ok, dy, 1.0), 0.0)
-
-    m_gauge = line_slope(_mirror(_HEAD["flank_down"]))
-    m_field = line_slope(_HEAD["flank_down"])
-    zero = 0.0 * theta
-    stack = xp.stack
-    return dict(
-        breaks=stack(list(jy)),
-        joint_z=stack(list(jz)),
-        yc=stack(list(cy)),
-        zc=stack(list(cz)),
-        radius=xp.asarray(_RADII),
-        y0=stack([jy[0]] + [zero + 0.0] * 5 + [jy[5]]),
-        z0=stack([jz[0]] + [zero + 0.0] * 5 + [jz[5]]),
-        m=stack([m_gauge] + [zero + 0.0] * 5 + [m_field]),
-    )
+    jy, jz = rot(_JOINTS)
+    cy, cz = rot(_CENTRES)
+    dy, dz = rot(_DIRECTIONS)
+    # The gauge flank turns vertical at 1:20; it lies outside the domain there, but its
+    # slope must stay finite for gradient-safe selection.
+    ok = (xp.abs(dy) > 1e-12) & xp.asarray(_IS_LINE)
+    m = xp.where(ok, dz / xp.where(ok, dy, 1.0), 0.0)
+    return dict(breaks=jy, joint_z=jz, yc=cy, zc=cz, radius=xp.asarray(_RADII),
+                y0=jy[_LINE_JOINT], z0=jz[_LINE_JOINT], m=m)
 
 
 def _piece_height_slope(xp, pieces, y, index):
