@@ -49,7 +49,14 @@ def _functions(profile):
 
 T = _functions(TREAD)
 F = _functions(FLANGE)
-FULL_HEIGHT = _functions(FULL)["height"]
+_FULL_HEIGHT = jax.jit(jax.vmap(FULL.height))
+
+
+def FULL_HEIGHT(y):  # noqa: N802 - reads like the other tables
+    y = np.asarray(y, dtype=float)
+    padded = np.full(GRID, y[0])
+    padded[: y.size] = y
+    return np.asarray(_FULL_HEIGHT(padded))[: y.size]
 
 
 def independent_split_mm():
