@@ -1,8 +1,8 @@
 """Complete elliptic integrals K(m) and E(m) in JAX, by the arithmetic-geometric mean.
 
 Convention: the **parameter** m = k^2 = e^2 (as scipy's ``ellipk(m)``/``ellipe(m)``),
-with the complementary parameter m1 = 1 - m. Valid for m <= 1 - 1e-300 in principle;
-tested to ~1e-14 relative for m in [0, 1 - 1e-12]. At m = 1 K is infinite.
+with the complementary parameter m1 = 1 - m. Tested to 1e-14 relative for m in
+[0, 1 - 1e-12]; m = 1 gives K = inf, E = 1 (derivatives infinite there).
 
 The AGM runs a fixed number of steps (no data-dependent loop), so every function is
 jit/vmap/grad-able. Derivatives are supplied analytically (``jax.custom_jvp``):
@@ -53,16 +53,19 @@ def agm_kq(
     b = jnp.sqrt(a * b)
     a = a_next
     q = m / (16.0 * a * a)
-    total = q
-    weight = 1.0
-    for _ in range(AGM_STEPS - 1):
+
+    def step(_, state):
+        a, b, q, total, weight = state
         a_next = 0.5 * (a + b)
         b = jnp.sqrt(a * b)
         # q_{n+1} = c_{n+1}^2 / m = q_n * c_n^2 / (16 a_{n+1}^2), c_n^2 = m q_n.
         q = q * (m * q) / (16.0 * a_next * a_next)
-        a = a_next
         weight = 2.0 * weight
-        total = total + weight * q
+        return a_next, b, q, total + weight * q, weight
+
+    a, _, _, total, _ = jax.lax.fori_loop(
+        0, AGM_STEPS - 1, step, (a, b, q, q, jnp.ones_like(m))
+    )
     return jnp.pi / (2.0 * a), total
 
 
@@ -71,7 +74,9 @@ def _ke_and_derivatives(m, m1):
     e = k * (1.0 - 0.5 * m - m * q)
     dk_dm = k * (0.5 - q) / (2.0 * m1)
     de_dm = -0.5 * k * (0.5 + q)
-    return k, e, dk_dm, de_dm
+    # m = 1: the AGM gives a huge finite K; return the true limits K = inf, E = 1.
+    at_one = m1 <= 0.0
+    return jnp.where(at_one, jnp.inf, k), jnp.where(at_one, 1.0, e), dk_dm, de_dm
 
 
 @jax.custom_jvp
@@ -100,21 +105,25 @@ def _ke_of_m1_jvp(primals, tangents):
     return (k, e), (-dk_dm * dm1, -de_dm * dm1)
 
 
+@jax.jit
 def ellipk(m: Float[ArrayLike, "..."]) -> Float[Array, "..."]:
     """Complete elliptic integral of the first kind K(m), parameter m = k^2 (m < 1)."""
     return _ke_of_m(jnp.asarray(m, dtype=jnp.float64))[0]
 
 
+@jax.jit
 def ellipe(m: Float[ArrayLike, "..."]) -> Float[Array, "..."]:
     """Complete elliptic integral of the second kind E(m), parameter m = k^2 (m <= 1)."""
     return _ke_of_m(jnp.asarray(m, dtype=jnp.float64))[1]
 
 
+@jax.jit
 def ellipke(m: Float[ArrayLike, "..."]) -> tuple[Float[Array, "..."], Float[Array, "..."]]:
     """``(K(m), E(m))`` from one AGM (cheaper than calling both)."""
     return _ke_of_m(jnp.asarray(m, dtype=jnp.float64))
 
 
+@jax.jit
 def ellipke_complementary(
     m1: Float[ArrayLike, "..."],
 ) -> tuple[Float[Array, "..."], Float[Array, "..."]]:

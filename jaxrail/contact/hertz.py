@@ -31,6 +31,8 @@ Zero load: a = b = approach = p0 = 0 with zero (finite) gradient at N = 0, altho
 the true derivative d a / d N ~ N^(-2/3) is infinite there. Negative N counts as 0.
 """
 
+import functools
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -40,6 +42,28 @@ from jaxrail._float64 import require_float64
 from jaxrail.contact.elliptic import agm_kq
 
 _NEWTON_STEPS = 6  # from the bracket midpoint: converged to 1e-15 after 3 steps (t <= 40)
+
+
+def _compiled(fn):
+    """``eqx.filter_jit`` with every argument but ``min_curvature_ratio`` traced.
+
+    filter_jit alone treats Python floats as static (one compilation per value); the
+    conversion to float64 arrays happens outside, so jit traces them. filter_jit (not
+    jax.jit) keeps the messages of ``eqx.error_if`` readable.
+    """
+    jitted = eqx.filter_jit(fn)
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        require_float64(fn.__name__)
+        args = [jnp.asarray(x, dtype=jnp.float64) for x in args]
+        kwargs = {
+            k: v if k == "min_curvature_ratio" else jnp.asarray(v, dtype=jnp.float64)
+            for k, v in kwargs.items()
+        }
+        return jitted(*args, **kwargs)
+
+    return wrapper
 
 
 class HertzContact(eqx.Module):
@@ -156,6 +180,7 @@ def _check_curvatures(a_curv, b_curv):
     return a_curv, b_curv
 
 
+@_compiled
 def hertz_coefficients(
     A: Float[ArrayLike, "..."], B: Float[ArrayLike, "..."]
 ) -> HertzCoefficients:
@@ -171,6 +196,7 @@ def _effective_modulus(G, nu):
     return G / (1.0 - nu)
 
 
+@_compiled
 def hertz_stiffness(
     A: Float[ArrayLike, "..."],
     B: Float[ArrayLike, "..."],
@@ -187,6 +213,7 @@ def hertz_stiffness(
     return coeffs.stiffness_factor * _effective_modulus(G, nu) / jnp.sqrt(A + B)
 
 
+@_compiled
 def hertz(
     normal_force: Float[ArrayLike, "..."],
     A: Float[ArrayLike, "..."],
@@ -237,6 +264,7 @@ def convex_curvature(profile, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
     return -profile.curvature(y)
 
 
+@_compiled
 def hertz_from_curvatures(
     normal_force: Float[ArrayLike, "..."],
     rolling_radius: Float[ArrayLike, "..."],
