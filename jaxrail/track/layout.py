@@ -158,8 +158,9 @@ class Track(eqx.Module):
         one = jnp.ones((), dtype=jnp.float64)
         zero = jnp.zeros((), dtype=jnp.float64)
         lengths = jnp.stack([_scalar(seg.length, "length") for seg in segments])
-        radii = jnp.stack([_scalar(seg.radius, "radius") if isinstance(seg, Arc) else one for seg in segments])
-        cants = jnp.stack([_scalar(seg.cant, "cant") if isinstance(seg, Arc) else zero for seg in segments])
+        # Placeholders (radius 1, cant 0) for straights and transitions; unused there.
+        radii = jnp.stack([_arc_field(g, "radius", one) for g in segments])
+        cants = jnp.stack([_arc_field(g, "cant", zero) for g in segments])
         signs = tuple(_direction_sign(seg) if isinstance(seg, Arc) else 0.0 for seg in segments)
         start = jnp.stack([_scalar(v, "start") for v in start])
         arrays = _assemble(lengths, radii, cants, start, kinds, signs, samples_per_segment)
@@ -225,6 +226,10 @@ def _scalar(x, name: str) -> Float[Array, ""]:
     if arr.ndim != 0:
         raise ValueError(f"{name} must be a scalar, got shape {arr.shape}")
     return arr
+
+
+def _arc_field(seg, name: str, default):
+    return _scalar(getattr(seg, name), name) if isinstance(seg, Arc) else default
 
 
 def _concrete(x) -> float | None:

@@ -230,7 +230,8 @@ def test_extension_beyond_ends_is_straight():
     end, h = p[4], float(v["heading"][4])
     for k in (2, 3):
         d = s[k] - TOTAL
-        np.testing.assert_allclose(p[k, :2], end[:2] + d * np.array([np.cos(h), np.sin(h)]), atol=1e-11)
+        straight_on = end[:2] + d * np.array([np.cos(h), np.sin(h)])
+        np.testing.assert_allclose(p[k, :2], straight_on, atol=1e-11)
     np.testing.assert_allclose(v["heading"][:4], [0.0, 0.0, h, h], atol=1e-15)
     np.testing.assert_allclose(v["curvature"], 0.0, atol=0)
     np.testing.assert_allclose(v["superelevation"], 0.0, atol=0)

@@ -18,7 +18,8 @@ def curve(radius=R, direction="left", cant=CANT):
 def test_curve_layout_segments():
     segs = T.curve_layout(R, "right", CANT, LS, LT, LA, 80.0)
     assert [type(s) for s in segs] == [T.Straight, T.Transition, T.Arc, T.Transition, T.Straight]
-    assert (segs[2].radius, segs[2].direction, segs[2].cant, segs[2].length) == (R, "right", CANT, LA)
+    arc = segs[2]
+    assert (arc.radius, arc.direction, arc.cant, arc.length) == (R, "right", CANT, LA)
     assert (segs[0].length, segs[1].length, segs[3].length, segs[4].length) == (LS, LT, LT, 80.0)
 
 
@@ -26,7 +27,8 @@ def test_curve_track_arrays():
     track = curve()
     assert track.n_segments == 5
     assert track.kinds == ("straight", "transition", "arc", "transition", "straight")
-    np.testing.assert_allclose(track.segment_start, [0, LS, LS + LT, LS + LT + LA, LS + 2 * LT + LA])
+    starts = [0, LS, LS + LT, LS + LT + LA, LS + 2 * LT + LA]
+    np.testing.assert_allclose(track.segment_start, starts)
     np.testing.assert_allclose(track.segment_length, [LS, LT, LA, LT, LS])
     assert float(track.total_length) == 2 * LS + 2 * LT + LA
     np.testing.assert_allclose(track.curvature_start, [0, 0, 1 / R, 1 / R, 0], rtol=1e-15)
@@ -34,7 +36,9 @@ def test_curve_track_arrays():
         track.curvature_rate, [0, 1 / (R * LT), 0, -1 / (R * LT), 0], rtol=1e-15
     )
     np.testing.assert_allclose(track.superelevation_start, [0, 0, CANT, CANT, 0], rtol=1e-15)
-    np.testing.assert_allclose(track.superelevation_rate, [0, CANT / LT, 0, -CANT / LT, 0], rtol=1e-15)
+    np.testing.assert_allclose(
+        track.superelevation_rate, [0, CANT / LT, 0, -CANT / LT, 0], rtol=1e-15
+    )
     half = LT / (2 * R)  # heading change of a transition
     np.testing.assert_allclose(
         track.heading_start, [0, 0, half, half + LA / R, 2 * half + LA / R], rtol=1e-15
@@ -82,7 +86,8 @@ def test_straight_track():
     track = T.straight_track(250.0, start=(1.0, 2.0, 0.3), rail_centre_distance=1.505)
     assert track.kinds == ("straight",)
     assert float(track.total_length) == 250.0
-    np.testing.assert_allclose([track.x_start[0], track.y_start[0], track.heading_start[0]], [1.0, 2.0, 0.3])
+    pose = [track.x_start[0], track.y_start[0], track.heading_start[0]]
+    np.testing.assert_allclose(pose, [1.0, 2.0, 0.3])
     assert float(track.rail_centre_distance) == 1.505
 
 

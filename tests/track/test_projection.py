@@ -38,7 +38,8 @@ def _project_all(track, p, s_guess):
     s, lat, vert = T.to_track_coordinates(track, p)
     s_from_guess = T.project(track, p, s_guess)
     tangent = T.track_frame(track, s)[:, 0]
-    return s, lat, vert, s_from_guess, tangent, T.curvature(track, s), T.centreline_position(track, s)
+    kappa, centre = T.curvature(track, s), T.centreline_position(track, s)
+    return s, lat, vert, s_from_guess, tangent, kappa, centre
 
 
 _round_trip_v = jax.jit(jax.vmap(_round_trip, (None, 0, 0, 0)))
@@ -65,7 +66,8 @@ def project_all(track, points, s_guess=None):
 
 def sample_points(total, k=200, seed=0):
     rng = np.random.default_rng(seed)
-    s = np.concatenate([np.linspace(0.0, total, k - 24), [LS, LS + LT, LS + LT + LA, LS + 2 * LT + LA]])
+    joints = [LS, LS + LT, LS + LT + LA, LS + 2 * LT + LA]
+    s = np.concatenate([np.linspace(0.0, total, k - 24), joints])
     s = np.concatenate([s, s[-4:] + 1e-6, s[-4:] - 1e-6, rng.uniform(-10.0, total + 10.0, 12)])
     lateral = rng.uniform(-2.0, 2.0, s.size)
     vertical = rng.uniform(-0.5, 1.0, s.size)
@@ -84,7 +86,8 @@ def test_round_trip_over_curve(track):
 
 def test_exact_straight():
     rng = np.random.default_rng(1)
-    pts = np.stack([rng.uniform(-30, LS - 5, 50), rng.uniform(-5, 5, 50), rng.uniform(-1, 1, 50)], 1)
+    x, y, z = rng.uniform(-30, LS - 5, 50), rng.uniform(-5, 5, 50), rng.uniform(-1, 1, 50)
+    pts = np.stack([x, y, z], 1)
     # The entry straight runs along X from the origin (extended before it): s = X,
     # lateral = Y, vertical = Z.
     s, lat, vert = project_all(LEFT, pts)[:3]
