@@ -73,8 +73,9 @@ _X = np.log(TABLE_A_OVER_B)
 _X_LO, _X_HI = float(_X[0]), float(_X[-1])
 
 
-# --- asymptotes of CONTACT `linrol`, as log c and its first two x-derivatives ------------
-# x = log(a/b). Written for NumPy (setup) and jax.numpy (evaluation) alike via `xp`.
+# --- asymptotes of CONTACT `linrol` in x = log(a/b) ----------------------------------------
+# _asym_*: log c with its first two x-derivatives, NumPy, for the set-up of the joins.
+# _log_asym_*: the same values only, jax.numpy, at run time.
 
 
 def _asym_small(x, nu, xp):
@@ -111,6 +112,27 @@ def _asym_large(x, nu, xp):
     d23 = 1.5 - wp / z
     dd23 = wp**2 / z**2
     return ((l11, d11, dd11), (l22, d22, dd22), (l23, d23, dd23))
+
+
+def _log_asym_small(x, nu):
+    """log (c11, c22, c23) of the a << b asymptote, shape (3, *nu.shape); runtime."""
+    ones = jnp.ones_like(nu)
+    l11 = math.log(math.pi**2 / 4.0) - jnp.log(1.0 - nu)
+    l22 = math.log(math.pi**2 / 4.0) * ones
+    l23 = l11 - math.log(0.75 * math.pi) + 0.5 * x + jnp.log(1.0 + nu * (_LN16 - 5.0 - x))
+    return jnp.stack([l11, l22, l23])
+
+
+def _log_asym_large(x, nu):
+    """log (c11, c22, c23) of the a >> b asymptote, shape (3, *nu.shape); runtime."""
+    lam = _LN16 + 2.0 * x
+    u = lam - 2.0 * nu
+    w = (1.0 - nu) * lam + 2.0 * nu
+    base = math.log(2.0 * math.pi) + x
+    l11 = base + jnp.log(u + _KAPPA) - 2.0 * jnp.log(u)
+    l22 = base + jnp.log(w + (1.0 - nu) * _KAPPA) - 2.0 * jnp.log(w)
+    l23 = math.log(2.0 * math.pi / 3.0) + 1.5 * x - jnp.log(w - 2.0 * (1.0 - nu))
+    return jnp.stack([l11, l22, l23])
 
 
 def _cubic_spline(x, y, dd_first, dd_last):
@@ -196,17 +218,21 @@ def _log_kalker(a_over_b, nu):
     x_hi = jnp.where(above, x, _X_HI)
 
     # The 9 table columns (c11, c22, c23 at nu = 0, .25, .5): spline inside the table,
-    # corrected asymptote outside.
+    # corrected asymptote outside. The asymptotes are evaluated at the table's nu and,
+    # in the 4th column, at the actual nu.
     knots = jnp.asarray(_X[1:-1], dtype=f64)
     i = jnp.sum(xs >= knots)  # interval index, 0 ... 17 (no search loop to compile)
     t = xs - jnp.asarray(_X, dtype=f64)[i]
     c = jnp.asarray(_COEFS, dtype=f64)[:, i, :]
     spline = c[:, 0] + t * (c[:, 1] + t * (c[:, 2] + t * c[:, 3]))
-    a_lo = jnp.concatenate([col[0] for col in _asym_small(x_lo, nu3, jnp)])
-    a_hi = jnp.concatenate([col[0] for col in _asym_large(x_hi, nu3, jnp)])
+    nu4 = jnp.concatenate([nu3, nu[None]])
+    asym_lo = _log_asym_small(x_lo, nu4)  # (3, 4)
+    asym_hi = _log_asym_large(x_hi, nu4)
     corr_lo = jnp.asarray(_D0_LO, dtype=f64) * _decay(_X_LO - x_lo, jnp.asarray(_S_LO, dtype=f64))
     corr_hi = jnp.asarray(_D0_HI, dtype=f64) * _decay(x_hi - _X_HI, jnp.asarray(_S_HI, dtype=f64))
-    columns = jnp.where(below, a_lo + corr_lo, jnp.where(above, a_hi + corr_hi, spline))
+    a_cols = jnp.where(below, asym_lo[:, :3], asym_hi[:, :3]).reshape(9)
+    corr = jnp.where(below, corr_lo, corr_hi)
+    columns = jnp.where(below | above, a_cols + corr, spline)
 
     weights = _nu_weights(nu)
     log_c = _log_nu_interp(columns, weights)
@@ -215,12 +241,7 @@ def _log_kalker(a_over_b, nu):
     # actual nu (the asymptotes are not quadratic in 1/c in nu: c23 would be 5 % off).
     # The blend factor 1 - exp(-u^3) is flat to second order at the table end (C2) and
     # leaves nu = 0, .25, .5 unchanged (there the two asymptote terms cancel).
-    a_cols = jnp.where(below, a_lo, a_hi)
-    a_nu = jnp.where(
-        below,
-        jnp.stack([col[0] for col in _asym_small(x_lo, nu, jnp)]),
-        jnp.stack([col[0] for col in _asym_large(x_hi, nu, jnp)]),
-    )
+    a_nu = jnp.where(below, asym_lo[:, 3], asym_hi[:, 3])
     u = (x_hi - _X_HI) + (_X_LO - x_lo)  # distance outside the table, 0 inside
     blend = 1.0 - jnp.exp(-(u**3))
     return log_c + blend * (a_nu - _log_nu_interp(a_cols, weights))
@@ -255,6 +276,7 @@ def kalker_asymptotes(
     ``a/b -> infinity`` (if a/b >= 1). For comparison and plots; scalar arguments."""
     x = jnp.log(jnp.asarray(a_over_b, dtype=jnp.float64))
     nu = jnp.asarray(nu, dtype=jnp.float64)
-    lo = _asym_small(jnp.where(x < 0.0, x, 0.0), nu, jnp)
-    hi = _asym_large(jnp.where(x < 0.0, 0.0, x), nu, jnp)
-    return tuple(jnp.exp(jnp.where(x < 0.0, lo[k][0], hi[k][0])) for k in range(3))
+    lo = _log_asym_small(jnp.where(x < 0.0, x, 0.0), nu)
+    hi = _log_asym_large(jnp.where(x < 0.0, 0.0, x), nu)
+    c = jnp.exp(jnp.where(x < 0.0, lo, hi))
+    return c[0], c[1], c[2]
