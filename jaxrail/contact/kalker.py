@@ -22,6 +22,8 @@ coefficients jump by up to 5 %. Here, for each coefficient and each tabulated nu
 
 Between nu values CONTACT's rule is used: 1/c is quadratic in nu through nu = 0, 0.25,
 0.5 (Lagrange). This reproduces the reference's nu = 0.28 and 0.30 columns at the rows.
+Outside the table the result is blended (factor 1 - exp(-u^3), flat to second order at
+the table end) into CONTACT's asymptote at the actual nu, which is not quadratic in 1/c.
 Valid for 0 <= nu <= 0.5.
 """
 
@@ -78,13 +80,13 @@ _X_LO, _X_HI = float(_X[0]), float(_X[-1])
 # _log_asym_*: the same values only, jax.numpy, at run time.
 
 
-def _asym_small(x, nu, xp):
+def _asym_small(x, nu):
     """a << b (g = a/b = e^x): (log c11, log c22, log c23), each with d/dx, d2/dx2."""
     zero = 0.0 * x
-    l11 = math.log(math.pi**2 / 4.0) - xp.log(1.0 - nu) + zero
+    l11 = math.log(math.pi**2 / 4.0) - np.log(1.0 - nu) + zero
     l22 = math.log(math.pi**2 / 4.0) + zero + 0.0 * nu
     m = 1.0 + nu * (_LN16 - 5.0 - x)
-    l23 = math.log(math.pi / 3.0) - xp.log(1.0 - nu) + 0.5 * x + xp.log(m)
+    l23 = math.log(math.pi / 3.0) - np.log(1.0 - nu) + 0.5 * x + np.log(m)
     d23 = 0.5 - nu / m
     dd23 = -(nu**2) / m**2
     return (
@@ -94,21 +96,21 @@ def _asym_small(x, nu, xp):
     )
 
 
-def _asym_large(x, nu, xp):
+def _asym_large(x, nu):
     """a >> b (g = b/a = e^-x, Lambda = ln16 + 2x): log c and derivatives, as above."""
     lam = _LN16 + 2.0 * x
     u = lam - 2.0 * nu  # c11 = 2 pi e^x (u + kappa) / u^2
-    l11 = math.log(2.0 * math.pi) + x + xp.log(u + _KAPPA) - 2.0 * xp.log(u)
+    l11 = math.log(2.0 * math.pi) + x + np.log(u + _KAPPA) - 2.0 * np.log(u)
     d11 = 1.0 + 2.0 / (u + _KAPPA) - 4.0 / u
     dd11 = 8.0 / u**2 - 4.0 / (u + _KAPPA) ** 2
     w = (1.0 - nu) * lam + 2.0 * nu  # c22 = 2 pi e^x (w + (1-nu) kappa) / w^2
     wp = 2.0 * (1.0 - nu)
     wk = w + (1.0 - nu) * _KAPPA
-    l22 = math.log(2.0 * math.pi) + x + xp.log(wk) - 2.0 * xp.log(w)
+    l22 = math.log(2.0 * math.pi) + x + np.log(wk) - 2.0 * np.log(w)
     d22 = 1.0 + wp / wk - 2.0 * wp / w
     dd22 = -(wp**2) / wk**2 + 2.0 * wp**2 / w**2
     z = (1.0 - nu) * lam - 2.0 + 4.0 * nu  # c23 = 2 pi e^(1.5 x) / (3 z)
-    l23 = math.log(2.0 * math.pi / 3.0) + 1.5 * x - xp.log(z)
+    l23 = math.log(2.0 * math.pi / 3.0) + 1.5 * x - np.log(z)
     d23 = 1.5 - wp / z
     dd23 = wp**2 / z**2
     return ((l11, d11, dd11), (l22, d22, dd22), (l23, d23, dd23))
@@ -162,8 +164,8 @@ def _build():
     for k in range(3):
         for j, nu in enumerate(TABLE_NU):
             y = np.log(TABLE[:, k, j])
-            lo = _asym_small(_X_LO, nu, np)[k]
-            hi = _asym_large(_X_HI, nu, np)[k]
+            lo = _asym_small(_X_LO, nu)[k]
+            hi = _asym_large(_X_HI, nu)[k]
             c = _cubic_spline(_X, y, float(lo[2]), float(hi[2]))
             h = _X[-1] - _X[-2]
             slope_hi = c[-1, 1] + 2.0 * c[-1, 2] * h + 3.0 * c[-1, 3] * h**2
