@@ -6,7 +6,6 @@ Run: python experiments/creep_forces/make_figures.py   (writes docs/figures/cree
 import pathlib
 
 import jax
-import jax.numpy as jnp
 import matplotlib
 
 matplotlib.use("Agg")
@@ -100,7 +99,8 @@ def fig_spin():
     _, fy = polach_batch(Q, MU, A, B, 0 * psi, 0 * psi, psi)
     c23 = float(kalker_coefficients(A / B, NU)[2])
     axes[1].plot(psi, np.array(fy) / (MU * Q), label="Polach, pure spin")
-    axes[1].plot(psi[np.abs(psi) < 1.5], -G * (A * B) ** 1.5 * c23 * psi[np.abs(psi) < 1.5] / (MU * Q), "k--", lw=0.8, label="Kalker linear")
+    lin = psi[np.abs(psi) < 1.5]
+    axes[1].plot(lin, -G * (A * B) ** 1.5 * c23 * lin / (MU * Q), "k--", lw=0.8, label="Kalker linear")
     axes[1].set_xlabel("spin phi [1/m]")
     axes[1].set_ylabel("Fy / (mu Q)")
     axes[1].set_title("pure spin: linear, then falling", fontsize=9)

@@ -154,7 +154,8 @@ def test_vmap_over_contacts():
     frames = np.broadcast_to(FLAT_FRAME, (4, 3, 3))
     batched = np.array(creep_batch(v, w, c, p, frames))
     for i in range(4):
-        np.testing.assert_allclose(batched[i], np.array(creep_default(v[i], w[i], c[i], p[i], FLAT_FRAME)), rtol=1e-14)
+        single = np.array(creep_default(v[i], w[i], c[i], p[i], FLAT_FRAME))
+        np.testing.assert_allclose(batched[i], single, rtol=1e-14)
 
 
 def test_bad_shapes_raise():
