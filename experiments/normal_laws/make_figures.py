@@ -161,7 +161,8 @@ def restitution_figure(numbers):
         "Flores(0.7), ref 0.1 m/s": rebound_batch(lambda _: Flores(0.7), speeds, True),
     }
     numbers["restitution_vs_speed"] = {
-        k: dict(zip(np.round(speeds, 5).tolist(), np.round(v, 4).tolist())) for k, v in by_speed.items()
+        k: dict(zip(np.round(speeds, 5).tolist(), np.round(v, 4).tolist()))
+        for k, v in by_speed.items()
     }
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9.5, 3.9))
@@ -237,13 +238,18 @@ def main():
     FIGURES.mkdir(parents=True, exist_ok=True)
     contact = hertz(5e4, 0.5 / 0.46, 0.5 / 0.3)
     numbers = {
-        "wheel_rail_50kN": {k: float(getattr(contact, k)) for k in ("a", "b", "approach", "stiffness", "p0")},
+        "wheel_rail_50kN": {
+            k: float(getattr(contact, k)) for k in ("a", "b", "approach", "stiffness", "p0")
+        },
         "drop": {"mass": MASS, "v_in": V_IN, "stiffness": STIFFNESS},
     }
     # Finding 1: eq. (17) rebounds with sqrt(c_e); dependence on v0 / v_in.
-    numbers["eq17_rebound"] = {c: round(rebound(Eq17(c, v0=0.01 * V_IN)), 5) for c in (0.3, 0.5, 0.8)}
+    numbers["eq17_rebound"] = {
+        c: round(rebound(Eq17(c, v0=0.01 * V_IN)), 5) for c in (0.3, 0.5, 0.8)
+    }
     numbers["eq17_rebound_error_vs_v0"] = {
-        r: round(rebound(Eq17(0.5, v0=r * V_IN)) / np.sqrt(0.5) - 1, 6) for r in (0.001, 0.01, 0.1, 0.3, 1.0)
+        r: round(rebound(Eq17(0.5, v0=r * V_IN)) / np.sqrt(0.5) - 1, 6)
+        for r in (0.001, 0.01, 0.1, 0.3, 1.0)
     }
     # Finding 3: static penetration under eq. (17) at rest vs Hertz.
     for ce in (0.5, 0.8):

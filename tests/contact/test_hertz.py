@@ -28,7 +28,9 @@ def _fields(c):
 # One compiled batch evaluator and one compiled batch Jacobian, shared by all tests.
 _hertz_batch = jax.jit(jax.vmap(lambda n, a, b, g, nu: _fields(hertz(n, a, b, g, nu))))
 _hertz_jac = jax.jit(
-    jax.vmap(jax.jacfwd(lambda n, a, b, g, nu: _fields(hertz(n, a, b, g, nu)), argnums=(0, 1, 2, 3, 4)))
+    jax.vmap(
+        jax.jacfwd(lambda n, a, b, g, nu: _fields(hertz(n, a, b, g, nu)), argnums=(0, 1, 2, 3, 4))
+    )
 )
 
 

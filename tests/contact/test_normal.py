@@ -130,7 +130,9 @@ def test_gradients_vs_central_differences(law):
     for rate in (-0.003, 0.002, 0.02):  # inside and outside the eq. (17) blend
         x = np.concatenate([[1e11, 1e-4, rate], np.asarray(params)])
         h = 1e-6 * np.maximum(np.abs(x), 1e-3)
-        fd = np.array([(f(x + h * e) - f(x - h * e)) / (2 * h[i]) for i, e in enumerate(np.eye(len(x)))])
+        fd = np.array(
+            [(f(x + h[i] * e) - f(x - h[i] * e)) / (2 * h[i]) for i, e in enumerate(np.eye(len(x)))]
+        )
         np.testing.assert_allclose(grad(x), fd, rtol=1e-6, atol=1e-9 * float(np.max(np.abs(fd))))
 
 
@@ -150,7 +152,8 @@ def test_vmap_over_a_batch_of_laws():
     law = LankaraniNikravesh(restitution)  # array-valued fields broadcast too
     np.testing.assert_allclose(
         law.force(1e11, 1e-4, 0.05),
-        [_damped_numpy("LankaraniNikravesh", 1e11, 1e-4, 0.05, c, 1.5, 0.1) for c in (0.3, 0.5, 0.8)],
+        [_damped_numpy("LankaraniNikravesh", 1e11, 1e-4, 0.05, c, 1.5, 0.1)
+         for c in (0.3, 0.5, 0.8)],
         rtol=1e-14,
     )
 
