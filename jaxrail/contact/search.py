@@ -1,0 +1,235 @@
+"""The paper's contact search for one wheel, one wheelset and a whole vehicle.
+
+Per wheel (DESIGN.md §4): the rail section nearest the wheel profile origin (eqs. 3-5),
+every strip of a fixed grid across each wheel surface against that locally straight
+rail (:mod:`jaxrail.contact.strip`, vmapped), runs of penetrating strips as patches,
+and the deepest point of each patch refined below the strip spacing
+(:mod:`jaxrail.contact.patches`). Results come in fixed-size patch slots with a mask.
+
+Wheels whose profile has one surface (real profiles) get ``max_patches`` slots; wheels
+with several surfaces (the paper's simplified profile: tread and flange, each convex)
+get one slot per surface, each surface searched independently.
+"""
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Bool, Float, Int
+
+from ..profiles._base import Profile, WheelProfile
+from ..track import project, rail_frame
+from .patches import find_patches, refine_maximum
+from .strip import strip_point, wheel_frame
+
+HALF_TAPING_DISTANCE = 0.75  # [m] taping lines 1500 mm apart (back-to-back 1360 mm)
+
+
+class SearchConfig(eqx.Module):
+    """Static settings of the search (changing them recompiles).
+
+    Fields:
+        strip_spacing: target distance between strips across a wheel surface [m];
+            the strip count per surface is ``ceil(width / strip_spacing) + 1``.
+        max_patches: patch slots of a single-surface (real) wheel.
+    """
+
+    strip_spacing: float = eqx.field(static=True, default=1.0e-3)
+    max_patches: int = eqx.field(static=True, default=3)
+
+    def strip_grid(self, surface: Profile) -> Float[Array, " n"]:
+        """Strip coordinates [m] across ``surface``, ends inset by 1e-6 m."""
+        lo, hi = surface.domain
+        count = math.ceil((hi - lo) / self.strip_spacing) + 1
+        return jnp.linspace(lo + 1e-6, hi - 1e-6, count)
+
+    def slots(self, wheel: WheelProfile) -> int:
+        """Patch slots per wheel for this wheel profile."""
+        return self.max_patches if len(wheel.surfaces) == 1 else len(wheel.surfaces)
+
+
+class ContactPatches(eqx.Module):
+    """Contact patches of one wheel (leading axes: ``(..., P)`` for P patch slots).
+
+    Positions and vectors are global [m]; profile coordinates follow
+    :mod:`jaxrail.profiles._base` (lateral toward the field side).
+
+    Fields:
+        active: slot holds a patch.
+        penetration: depth of the contact point into the rail [m], 0 where inactive.
+        surface: index of the wheel surface of the patch.
+        y_wheel: u_w, wheel profile lateral coordinate of the contact point [m].
+        s_wheel: s_w, angle on the wheel circle from its lowest point [rad] (eq. 12).
+        dx: longitudinal offset of the contact point from the rail section [m] (eq. 13).
+        y_rail: u_r, rail profile lateral coordinate [m] (eq. 15).
+        s_rail: s_r, track arc length of the rail section [m] (eqs. 3-5).
+        y_track: lateral position of the contact point from the track centre [m],
+            positive to the left, in the (canted) track plane.
+        wheel_point, rail_point: the strip's wheel point and its foot on the rail [m].
+        normal: unit contact normal, out of the rail into the wheel.
+        frame: contact frame, columns [longitudinal t, lateral (normal x t), normal].
+        contact_angle: angle of the normal from the rail's up axis [rad], positive
+            when it tilts toward the track centre (flange contact ~ +70 deg).
+        rolling_radius: wheel radius at ``y_wheel`` [m].
+        curvature_wheel_x: wheel curvature in the rolling direction,
+            ``cos(wheel profile angle) / rolling_radius`` [1/m].
+        curvature_wheel_y, curvature_rail_y: lateral profile curvatures [1/m], convex
+            toward the other body positive (the S1002 throat is negative).
+    """
+
+    active: Bool[Array, "... p"]
+    penetration: Float[Array, "... p"]
+    surface: Int[Array, "... p"]
+    y_wheel: Float[Array, "... p"]
+    s_wheel: Float[Array, "... p"]
+    dx: Float[Array, "... p"]
+    y_rail: Float[Array, "... p"]
+    s_rail: Float[Array, "... p"]
+    y_track: Float[Array, "... p"]
+    wheel_point: Float[Array, "... p 3"]
+    rail_point: Float[Array, "... p 3"]
+    normal: Float[Array, "... p 3"]
+    frame: Float[Array, "... p 3 3"]
+    contact_angle: Float[Array, "... p"]
+    rolling_radius: Float[Array, "... p"]
+    curvature_wheel_x: Float[Array, "... p"]
+    curvature_wheel_y: Float[Array, "... p"]
+    curvature_rail_y: Float[Array, "... p"]
+
+
+def _surface_strips(surface, wheel, rail, geometry, config):
+    """The strip function of one wheel surface, its grid and all strips on it."""
+    wheel_origin, frame, rail_origin, rail_axes, side = geometry
+
+    def point(y):
+        return strip_point(surface, wheel.nominal_radius, rail, y, wheel_origin, frame,
+                           rail_origin, rail_axes, side)
+
+    y_grid = config.strip_grid(surface)
+    return point, y_grid, jax.vmap(point)(y_grid)
+
+
+def _surface_patches(surface, surface_index, wheel, rail, geometry, config, slots):
+    """Patches of one wheel surface: strips, runs, refinement, contact data."""
+    point, y_grid, strips = _surface_strips(surface, wheel, rail, geometry, config)
+    index, active, _ = find_patches(strips.depth, strips.rail_inside > 0.5, slots)
+    depth_fn = lambda y: point(y).depth  # noqa: E731
+    y_star = jax.vmap(lambda i: refine_maximum(depth_fn, y_grid, strips.depth, i, surface.domain))(index)
+    _, _, rail_origin, rail_axes, side = geometry
+    return jax.vmap(lambda y, on: _contact_data(surface, surface_index, wheel, rail, point, y, on,
+                                                rail_origin, rail_axes, side))(y_star, active)
+
+
+def _surface_deepest(surface, wheel, rail, geometry, config):
+    """Refined signed depth [m] and coordinate [m] of the deepest strip of a surface
+    (penetrating or not)."""
+    point, y_grid, strips = _surface_strips(surface, wheel, rail, geometry, config)
+    depth = jnp.where(strips.rail_inside > 0.5, strips.depth, -1.0e3)
+    depth_fn = lambda y: point(y).depth  # noqa: E731
+    y_star = refine_maximum(depth_fn, y_grid, depth, jnp.argmax(depth), surface.domain)
+    return point(y_star).depth, y_star
+
+
+def _contact_data(surface, surface_index, wheel, rail, point, y, active, rail_origin, rail_axes, side):
+    p = point(y)
+    t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
+    f1 = rail.slope(p.y_rail)
+    normal = (-side * f1 * n + b) / jnp.sqrt(1.0 + f1 * f1)
+    rail_point = rail_origin + p.dx * t + side * p.y_rail * n + rail.height(p.y_rail) * b
+    lateral = jnp.cross(normal, t)
+    w1 = surface.slope(y)
+    rolling_radius = wheel.nominal_radius + surface.height(y)
+    active = active & (p.depth > 0.0)
+    return dict(
+        active=active,
+        penetration=jnp.where(active, p.depth, 0.0),
+        surface=jnp.asarray(surface_index),
+        y_wheel=y,
+        s_wheel=p.s_wheel,
+        dx=p.dx,
+        y_rail=p.y_rail,
+        wheel_point=p.wheel_point,
+        rail_point=rail_point,
+        normal=normal,
+        frame=jnp.stack([t, lateral, normal], axis=1),
+        contact_angle=jnp.arctan(f1),
+        rolling_radius=rolling_radius,
+        curvature_wheel_x=1.0 / (jnp.sqrt(1.0 + w1 * w1) * rolling_radius),
+        curvature_wheel_y=-surface.second_derivative(y) / (1.0 + w1 * w1) ** 1.5,
+        curvature_rail_y=-rail.second_derivative(p.y_rail) / (1.0 + f1 * f1) ** 1.5,
+    )
+
+
+def _wheel_geometry(track, rail_offset, wheelset_position, wheelset_rotation, side, s_guess):
+    """Wheel origin, wheel frame and rail section of one wheel (eqs. 3-7)."""
+    axle = wheelset_rotation[:, 1]
+    wheel_origin = wheelset_position + side * HALF_TAPING_DISTANCE * axle
+    s_rail = project(track, wheel_origin, s_guess)
+    rail_origin, rail_axes = rail_frame(track, s_rail, side, rail_offset)
+    frame = wheel_frame(axle, rail_axes[:, 0])
+    return s_rail, (wheel_origin, frame, rail_origin, rail_axes, side)
+
+
+def search_wheel(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelset_position,
+                 wheelset_rotation, side, config: SearchConfig = SearchConfig(),
+                 s_guess=None) -> ContactPatches:
+    """Contact patches between one wheel and its rail.
+
+    Arguments:
+        wheel, rail: wheel and rail profiles (the same profiles serve both sides).
+        track: a :class:`jaxrail.track.Track`.
+        rail_offset: distance from the track centre to the rail profile origin [m]
+            (:func:`jaxrail.profiles.rail_offset`).
+        wheelset_position: wheelset centre, global, shape (3,) [m].
+        wheelset_rotation: wheelset orientation, shape (3, 3), columns = body axes
+            (forward, axle to the left, up) in global components.
+        side: +1.0 left wheel, -1.0 right wheel (may be traced, e.g. vmapped).
+        config: static search settings.
+        s_guess: optional arc-length guess for the rail section [m].
+
+    Returns :class:`ContactPatches` with leading shape ``(P,)``.
+    """
+    side = jnp.asarray(side, dtype=jnp.float64)
+    s_rail, geometry = _wheel_geometry(track, rail_offset, wheelset_position, wheelset_rotation,
+                                       side, s_guess)
+    slots = config.slots(wheel)
+    per_surface = slots if len(wheel.surfaces) == 1 else 1
+    parts = [_surface_patches(s, k, wheel, rail, geometry, config, per_surface)
+             for k, s in enumerate(wheel.surfaces)]
+    data = {key: jnp.concatenate([part[key] for part in parts]) for key in parts[0]}
+    data["surface"] = data["surface"].astype(jnp.int32)
+    data["s_rail"] = jnp.full((slots,), s_rail)
+    data["y_track"] = side * (rail_offset + data["y_rail"])
+    return ContactPatches(**data)
+
+
+def deepest_depth(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelset_position,
+                  wheelset_rotation, side, config: SearchConfig = SearchConfig(), s_guess=None):
+    """Largest signed depth [m] of a wheel into its rail over all strips and surfaces,
+    refined below the strip spacing (negative: the wheel is clear of the rail by that
+    normal distance). Used to put a wheelset on the rails (quasi-static geometry)."""
+    side = jnp.asarray(side, dtype=jnp.float64)
+    _, geometry = _wheel_geometry(track, rail_offset, wheelset_position, wheelset_rotation,
+                                  side, s_guess)
+    depths = [_surface_deepest(s, wheel, rail, geometry, config)[0] for s in wheel.surfaces]
+    return jnp.max(jnp.stack(depths))
+
+
+def search_wheelset(wheel, rail, track, rail_offset, wheelset_position, wheelset_rotation,
+                    config: SearchConfig = SearchConfig(), s_guess=None) -> ContactPatches:
+    """Both wheels of a wheelset; leading shape ``(2, P)`` ordered (left, right)."""
+    sides = jnp.array([1.0, -1.0])
+    return jax.vmap(lambda side: search_wheel(wheel, rail, track, rail_offset, wheelset_position,
+                                              wheelset_rotation, side, config, s_guess))(sides)
+
+
+def search_vehicle(wheel, rail, track, rail_offset, wheelset_positions, wheelset_rotations,
+                   config: SearchConfig = SearchConfig(), s_guesses=None) -> ContactPatches:
+    """All wheels of a vehicle in one call: positions ``(W, 3)``, rotations ``(W, 3, 3)``;
+    leading shape ``(W, 2, P)``."""
+    if s_guesses is None:
+        return jax.vmap(lambda p, r: search_wheelset(wheel, rail, track, rail_offset, p, r, config))(
+            wheelset_positions, wheelset_rotations)
+    return jax.vmap(lambda p, r, s: search_wheelset(wheel, rail, track, rail_offset, p, r, config, s))(
+        wheelset_positions, wheelset_rotations, s_guesses)

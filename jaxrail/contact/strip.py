@@ -1,0 +1,151 @@
+"""One wheel strip against a locally straight rail: eqs. (6)-(16) of the paper.
+
+A *strip* is the circle of the wheel at lateral profile coordinate ``y`` (field side
+positive, from the taping line). The rail section ``s_r`` has been found (eqs. 3-5) and
+the rail is straight around it, so the rail surface is the sweep of its profile along
+the rail tangent ``t``. For a strip this module computes, in closed form:
+
+- ``s_w``, the angle on the strip circle where the wheel surface normal lies in the
+  rail's cross-section plane (eq. 12, with the slope ``F'`` the OCR lost):
+  ``sin s_w = side * F'(y) * tan(alpha)``, ``sin(alpha) = axle . t``;
+- the wheel point ``P`` and its longitudinal offset from the rail section
+  ``dx = side * (y + R(y) F'(y)) * sin(alpha)`` (eq. 13, corrected);
+- the rail lateral coordinate ``u_r`` whose rail normal passes through ``P`` (eq. 15),
+  by a fixed number of safeguarded Newton steps (the rail head is convex);
+- the signed depth of ``P`` below the rail surface along the rail normal (eq. 16:
+  positive = penetration).
+
+Frames: ``t, n, b`` are the rail frame columns (global, unit): along the track, lateral
+to the left, up. ``side`` is +1 for the left wheel/rail and -1 for the right one; profile
+lateral coordinates point to the field side, i.e. along ``side * n`` (rail) and
+``side * axle`` (wheel). The wheel angle ``s_w`` is measured on the strip circle from
+its lowest point (``-b_w``) toward the wheel frame's forward axis ``n_w``.
+"""
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from ..profiles._base import Profile
+
+RAIL_NEWTON_STEPS = 5
+
+
+class WheelFrame(NamedTuple):
+    """Wheel frame of eq. (7) for one wheel (global components, unit vectors)."""
+
+    axle: Float[Array, "3"]  # a_w: wheelset axle, pointing left
+    up: Float[Array, "3"]  # b_w = t x a / |t x a|
+    forward: Float[Array, "3"]  # n_w = a x b_w
+    sin_alpha: Float[Array, ""]  # a . t: yaw of the axle relative to the rail section
+    cos_alpha: Float[Array, ""]
+
+
+class StripPoint(NamedTuple):
+    """Geometry of one strip against the rail (scalars unless noted)."""
+
+    depth: Float[Array, ""]  # signed depth along the rail normal [m], > 0 penetrating
+    s_wheel: Float[Array, ""]  # s_w [rad]
+    dx: Float[Array, ""]  # longitudinal offset along t from the rail section [m]
+    y_rail: Float[Array, ""]  # u_r: rail profile coordinate of the foot point [m]
+    wheel_point: Float[Array, "3"]  # P, global [m]
+    rail_inside: Float[Array, ""]  # 1.0 where the foot point is inside the rail domain
+
+
+def wheel_frame(axle: Float[Array, "3"], t: Float[Array, "3"]) -> WheelFrame:
+    """Eq. (7): a frame that shares the axle and is aligned with the rail tangent."""
+    up = jnp.cross(t, axle)
+    cos_alpha = jnp.linalg.norm(up)
+    up = up / cos_alpha
+    return WheelFrame(axle, up, jnp.cross(axle, up), axle @ t, cos_alpha)
+
+
+def strip_angle(slope: Float[Array, ""], frame: WheelFrame, side) -> Float[Array, ""]:
+    """Eq. (12) corrected: ``s_w = arcsin(side * F'(y) * tan(alpha))`` [rad]."""
+    arg = side * slope * frame.sin_alpha / frame.cos_alpha
+    return jnp.arcsin(jnp.clip(arg, -0.999, 0.999))
+
+
+def longitudinal_offset(y, radius, slope, frame: WheelFrame, side) -> Float[Array, ""]:
+    """Eq. (13) corrected: ``dx = side * (y + R F') * sin(alpha)`` [m].
+
+    Closed form of ``(P - rail_origin) . t`` once the wheel profile origin lies in the
+    rail section plane (eq. 5); kept for documentation and tests."""
+    return side * (y + radius * slope) * frame.sin_alpha
+
+
+def rail_foot(rail: Profile, eta, zeta) -> tuple[Float[Array, ""], Float[Array, ""]]:
+    """Eq. (15): the rail coordinate ``u`` whose normal passes through ``(eta, zeta)``.
+
+    ``(eta, zeta)`` are the point's field-side-lateral and vertical coordinates in the
+    rail section plane [m]. Newton on ``g(u) = (eta - u) + (zeta - f(u)) f'(u)`` from the
+    vertical projection, clipped to the rail domain; unique on a convex head. Returns
+    ``(u, valid)`` with ``valid = 1.0`` when the point lies over the rail head
+    (``eta`` inside the domain), ``u`` did not hit the domain ends and the Newton
+    residual converged (below 1e-9 m); elsewhere the depth has no meaning (a strip
+    beside the rail, e.g. the back of the flange, is never in contact).
+    """
+    lo, hi = rail.domain
+
+    def residual(u):
+        f, f1 = rail.height(u), rail.slope(u)
+        return (eta - u) + (zeta - f) * f1, f, f1
+
+    def newton(u, _):
+        g, f, f1 = residual(u)
+        dg = -1.0 - f1 * f1 + (zeta - f) * rail.second_derivative(u)
+        # On a convex head dg <= -1 near the foot; the floor guards far-away points.
+        dg = jnp.minimum(dg, -0.5)
+        return jnp.clip(u - g / dg, lo, hi), None
+
+    u, _ = jax.lax.scan(newton, jnp.clip(eta, lo, hi), None, length=RAIL_NEWTON_STEPS)
+    converged = jnp.abs(residual(u)[0]) < 1e-9
+    valid = (eta > lo) & (eta < hi) & (u > lo) & (u < hi) & converged
+    return u, jnp.where(valid, 1.0, 0.0)
+
+
+def signed_depth(rail: Profile, u, eta, zeta) -> Float[Array, ""]:
+    """Distance of ``(eta, zeta)`` below the rail surface along the rail normal at ``u``
+    [m] (eq. 16; positive = inside the rail)."""
+    f1 = rail.slope(u)
+    gap = (zeta - rail.height(u)) - (eta - u) * f1
+    return -gap / jnp.sqrt(1.0 + f1 * f1)
+
+
+def strip_point(
+    surface: Profile,
+    nominal_radius,
+    rail: Profile,
+    y,
+    wheel_origin: Float[Array, "3"],
+    frame: WheelFrame,
+    rail_origin: Float[Array, "3"],
+    rail_axes: Float[Array, "3 3"],
+    side,
+) -> StripPoint:
+    """Geometry of the strip at wheel profile coordinate ``y`` [m].
+
+    Arguments:
+        surface, nominal_radius: the wheel surface and rolling radius at the taping
+            line [m] (rolling radius ``R(y) = nominal_radius + height(y)``).
+        rail: the rail profile.
+        y: wheel lateral profile coordinate [m], field side positive.
+        wheel_origin: the wheel profile origin (taping line on the axle), global [m].
+        frame: :func:`wheel_frame` of this wheel.
+        rail_origin, rail_axes: rail profile origin [m] and rail frame ``[t n b]``
+            (columns, global) at the rail section ``s_r``.
+        side: +1.0 left wheel, -1.0 right wheel.
+    """
+    slope = surface.slope(y)
+    radius = nominal_radius + surface.height(y)
+    s_w = strip_angle(slope, frame, side)
+    radial = -jnp.cos(s_w) * frame.up + jnp.sin(s_w) * frame.forward
+    point = wheel_origin + side * y * frame.axle + radius * radial
+    rel = point - rail_origin
+    t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
+    eta, zeta = side * (rel @ n), rel @ b
+    u, inside = rail_foot(rail, eta, zeta)
+    depth = signed_depth(rail, u, eta, zeta)
+    return StripPoint(depth, s_w, rel @ t, u, point, inside)
