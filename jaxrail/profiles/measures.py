@@ -1,8 +1,9 @@
 """Profile measures: rail top, gauge point and rail position; wheel flange measures.
 
-All functions are pure JAX with fixed iteration counts (a coarse grid search, then
-bisection, then a few Newton steps started from a ``stop_gradient`` estimate, so that
-the gradients are those of the implicit function theorem). They jit, vmap (over a
+All functions are pure JAX with fixed iteration counts: a coarse grid search and a
+bisection on a copy of the profile cut from the gradient (so those loops trace no
+tangents), then one Newton step with the real profile from the converged estimate,
+which carries the gradient of the implicit function theorem. They jit, vmap (over a
 batch of profiles) and differentiate with respect to the profile parameters.
 
 Conventions are those of :mod:`jaxrail.profiles._base`: ``y`` [m] toward the field
@@ -18,7 +19,13 @@ from ._base import Profile
 
 GRID_POINTS = 257  # coarse search: 0.3 mm spacing on a rail head, 0.5 mm on a wheel
 BISECTION_STEPS = 52  # brackets of ~0.1 m shrink below 1e-16 m
-NEWTON_STEPS = 2
+NEWTON_STEPS = 1  # after a converged bisection one step gives the exact gradient
+
+
+def _frozen(profile: Profile) -> Profile:
+    """The profile with every array leaf behind ``stop_gradient``."""
+    return jax.tree_util.tree_map(
+        lambda x: jax.lax.stop_gradient(x) if eqx.is_array(x) else x, profile)
 
 
 def _where_clip(y, lo, hi):
@@ -69,25 +76,31 @@ def _grid_argmax(g, lo: float, hi, n: int = GRID_POINTS):
     return ys[jnp.maximum(k - 1, 0)], ys[jnp.minimum(k + 1, n - 1)]
 
 
-def _maximizer(g, dg, lo, hi):
+def _maximizer(g, dg, lo, hi, plateau: bool = False):
     """Location (no gradient) of the maximum of ``g`` on ``[lo, hi]``: grid search,
     then bisection on the derivative ``dg`` inside the two cells around the grid max.
-    Returns the location and that bracket."""
+    With ``plateau``, a flat maximum (``dg == 0`` on an interval, as on a straight
+    flank) gives its middle, where the value's gradient is that of the flat piece.
+    Returns the location and the bracket."""
     a, b = _grid_argmax(g, lo, hi)
-    # On a plateau of the maximum (a straight flank for the flange angle) take its
-    # middle, where the value's gradient is that of the plateau itself.
-    y = 0.5 * (_bisect(dg, a, b) + _bisect(dg, a, b, zeros_on_lo_side=True))
+    y = _bisect(dg, a, b)
+    if plateau:
+        y = 0.5 * (y + _bisect(dg, a, b, zeros_on_lo_side=True))
     return y, (a, b)
 
 
 def _level_crossing(profile: Profile, level, lo, hi):
     """``y`` in ``[lo, hi]`` where ``profile.height(y) == level`` (height monotone there)."""
+    frozen, frozen_level = _frozen(profile), jax.lax.stop_gradient(level)
+    y = _bisect(lambda y: frozen.height(y) - frozen_level, lo, hi)
+    return _newton(lambda y: profile.height(y) - level, profile.slope, y, lo, hi)
 
-    def f(y):
-        return profile.height(y) - level
 
-    y = _bisect(f, lo, hi)
-    return _newton(f, profile.slope, y, lo, hi)
+def _top_location(profile: Profile):
+    """Location [m] of the highest point (no gradient) and its search bracket. The
+    height there still has the right gradient (envelope theorem: slope 0)."""
+    frozen = _frozen(profile)
+    return _maximizer(frozen.height, frozen.slope, *profile.domain)
 
 
 def highest_point(rail: Profile) -> tuple[Float[Array, ""], Float[Array, ""]]:
@@ -99,8 +112,7 @@ def highest_point(rail: Profile) -> tuple[Float[Array, ""], Float[Array, ""]]:
 
     Returns ``y`` [m] (profile frame, + toward the field side) and ``z = height(y)``.
     """
-    lo, hi = rail.domain
-    y, (a, b) = _maximizer(rail.height, rail.slope, lo, hi)
+    y, (a, b) = _top_location(rail)
     y = _newton(rail.slope, rail.second_derivative, y, a, b)
     return y, rail.height(y)
 
@@ -114,8 +126,8 @@ def gauge_point(rail: Profile, gauge_height: Float[ArrayLike, ""] = 0.014) -> Fl
     inside the profile domain.
     """
     gauge_height = jnp.asarray(gauge_height, dtype=jnp.float64)
-    y_top, z_top = highest_point(rail)
-    level = z_top - gauge_height
+    y_top, _ = _top_location(rail)
+    level = rail.height(y_top) - gauge_height
     lo = rail.domain[0]
     y = _level_crossing(rail, level, lo, y_top)
     return eqx.error_if(
@@ -137,8 +149,10 @@ def rail_offset(rail: Profile, gauge: Float[ArrayLike, ""] = 1.435,
 
 
 def _flange_tip(wheel_surface: Profile):
-    """Highest point ``(y, height)`` [m] of a wheel surface (the flange tip)."""
-    return highest_point(wheel_surface)
+    """Flange tip: highest point ``(y, height)`` [m] of a wheel surface; ``y`` carries
+    no gradient (it only brackets the flank), the height does."""
+    y_tip, _ = _top_location(wheel_surface)
+    return y_tip, wheel_surface.height(y_tip)
 
 
 def _check_datum(wheel_surface: Profile) -> None:
@@ -194,14 +208,9 @@ def flange_angle(wheel_surface: Profile) -> Float[Array, ""]:
     """Flange angle [rad]: the largest inclination ``atan(-d height/dy)`` of the active
     flank between the flange tip and the taping line (70 degrees for S1002)."""
     _check_datum(wheel_surface)
-    y_tip, _ = _flange_tip(wheel_surface)
-
-    def steepness(y):
-        return -wheel_surface.slope(y)
-
-    def d_steepness(y):
-        return -wheel_surface.second_derivative(y)
-
-    y, _ = _maximizer(steepness, d_steepness, y_tip, 0.0)
+    frozen = _frozen(wheel_surface)
+    y_tip, _ = _top_location(frozen)
+    y, _ = _maximizer(lambda y: -frozen.slope(y), lambda y: -frozen.second_derivative(y),
+                      y_tip, 0.0, plateau=True)
     # At an interior maximum the value's gradient needs no d y/d parameter (envelope).
-    return jnp.arctan(steepness(y))
+    return jnp.arctan(-wheel_surface.slope(y))

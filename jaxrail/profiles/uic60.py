@@ -82,70 +82,78 @@ def _uncanted_field_side():
 
 _HEAD = _uncanted_field_side()
 
-# Pieces from the gauge side to the field side, as constant tables of the uncanted
-# head (rotated as whole arrays: few operations to trace, differentiate and compile).
+# Pieces from the gauge side to the field side, as one constant table of the uncanted
+# head. Each piece has four points (rows of _POINTS): circle centre, a point of its line,
+# the line direction (flanks only; circles get a harmless horizontal one), and the joint
+# at its gauge-side end. The whole table is rotated at once and one row is gathered per
+# evaluation: few operations to trace, differentiate and compile.
 _PIECES = ("flank", "corner", "side", "crown", "side", "corner", "flank")
 _IS_LINE = np.array([name == "flank" for name in _PIECES])
-_RADII = np.array([CORNER_RADIUS, CORNER_RADIUS, SIDE_RADIUS, CROWN_RADIUS, SIDE_RADIUS,
-                   CORNER_RADIUS, CORNER_RADIUS])  # flanks carry their neighbour's (unused)
 _GAUGE = np.array([-1.0, 1.0])  # mirror a field-side point to the gauge side
-_JOINTS = np.array([_GAUGE * _HEAD["joints"][2], _GAUGE * _HEAD["joints"][1],
-                    _GAUGE * _HEAD["joints"][0], *_HEAD["joints"]])  # (6, 2)
-_CENTRES = np.array([_GAUGE * _HEAD["corner_centre"], _GAUGE * _HEAD["corner_centre"],
-                     _GAUGE * _HEAD["side_centre"], _HEAD["crown_centre"],
-                     _HEAD["side_centre"], _HEAD["corner_centre"], _HEAD["corner_centre"]])
-# Line direction of each piece (flanks only; circles get a harmless horizontal one) and
-# the joint each line passes through.
-_DIRECTIONS = np.array([_GAUGE * _HEAD["flank_down"]] + [[1.0, 0.0]] * 5 + [_HEAD["flank_down"]])
-_LINE_JOINT = np.array([0, 0, 0, 0, 0, 0, 5])
 
 
-def _canted_pieces(xp, theta):
-    """Canted geometry for inclination ``theta`` [rad], with ``xp`` numpy or jax.numpy.
+def _point_table():
+    j1, j2, j3 = _HEAD["joints"]
+    joints = [_GAUGE * j3, _GAUGE * j3, _GAUGE * j2, _GAUGE * j1, j1, j2, j3]
+    centres = [_GAUGE * _HEAD["corner_centre"], _GAUGE * _HEAD["corner_centre"],
+               _GAUGE * _HEAD["side_centre"], _HEAD["crown_centre"],
+               _HEAD["side_centre"], _HEAD["corner_centre"], _HEAD["corner_centre"]]
+    line_points = [_GAUGE * j3] + [j3] * 6  # used by the flanks only
+    directions = [_GAUGE * _HEAD["flank_down"]] + [[1.0, 0.0]] * 5 + [_HEAD["flank_down"]]
+    return np.stack([np.array(centres), np.array(line_points), np.array(directions),
+                     np.array(joints)], axis=1)  # (7 pieces, 4 points, (y, z))
 
-    Returns a dict of arrays [m]: ``breaks`` (6,) canted y of the joints, ``joint_z``
-    (6,), per-piece circle centres ``yc, zc`` and radii ``radius`` (7,), and per-piece
-    line point ``y0, z0`` and slope ``m`` (7,; meaningful for the two flanks only).
-    """
+
+_POINTS = _point_table()
+# Per piece: radius (flanks carry their neighbour's, unused) and a line flag.
+_CONSTANTS = np.stack([np.array([CORNER_RADIUS, CORNER_RADIUS, SIDE_RADIUS, CROWN_RADIUS,
+                                 SIDE_RADIUS, CORNER_RADIUS, CORNER_RADIUS]),
+                       _IS_LINE.astype(np.float64)], axis=1)  # (7, 2)
+
+
+def _canted_table(xp, theta):
+    """Per piece (7, 10): canted y of the 4 points, their z, then radius and line flag."""
     c, s = xp.cos(theta), xp.sin(theta)
-
-    def rot(points):
-        y, z = points[:, 0], points[:, 1]
-        return c * y - s * z, s * y + c * z
-
-    jy, jz = rot(_JOINTS)
-    cy, cz = rot(_CENTRES)
-    dy, dz = rot(_DIRECTIONS)
-    # The gauge flank turns vertical at 1:20; it lies outside the domain there, but its
-    # slope must stay finite for gradient-safe selection.
-    ok = (xp.abs(dy) > 1e-12) & xp.asarray(_IS_LINE)
-    m = xp.where(ok, dz / xp.where(ok, dy, 1.0), 0.0)
-    return dict(breaks=jy, joint_z=jz, yc=cy, zc=cz, radius=xp.asarray(_RADII),
-                y0=jy[_LINE_JOINT], z0=jz[_LINE_JOINT], m=m)
+    y, z = _POINTS[..., 0], _POINTS[..., 1]
+    return xp.concatenate([c * y - s * z, s * y + c * z, xp.asarray(_CONSTANTS)], axis=1)
 
 
-def _piece_height_slope(xp, pieces, y, index):
-    """Height and slope [m, -] of piece ``index`` (int array) continued to ``y`` [m]."""
-    d = y - pieces["yc"][index]
-    r = pieces["radius"][index]
-    arg = r * r - d * d
+def _breaks(table):
+    """Canted y [m] of the six joints (gauge side first): piece k+1 starts at break k."""
+    return table[1:, 3]
+
+
+def _piece_height_slope(xp, row, y):
+    """Height and slope [m, -] of the piece whose table row is ``row``, continued to
+    ``y`` [m] beyond its joints (circles beyond their vertical tangents give a finite
+    dummy; the gradient-safe double ``where`` keeps NaN out of derivatives)."""
+    yc, y0, dy, zc, z0, dz, radius, is_line = (row[i] for i in (0, 1, 2, 4, 5, 6, 8, 9))
+    d = y - yc
+    arg = radius * radius - d * d
     ok = arg > 0.0
     root = xp.sqrt(xp.where(ok, arg, 1.0))
-    circle_h = pieces["zc"][index] + xp.where(ok, root, 0.0)
+    circle_h = zc + xp.where(ok, root, 0.0)
     circle_s = xp.where(ok, -d / root, 0.0)
-    m = pieces["m"][index]
-    line_h = pieces["z0"][index] + m * (y - pieces["y0"][index])
-    is_line = xp.asarray(_IS_LINE)[index]
-    return xp.where(is_line, line_h, circle_h), xp.where(is_line, m, circle_s)
+    # The gauge flank turns vertical at 1:20 (dy = 0); it lies outside the domain then.
+    steep = xp.abs(dy) <= 1e-12
+    m = xp.where(steep, 0.0, dz / xp.where(steep, 1.0, dy))
+    line = is_line > 0.5
+    return xp.where(line, z0 + m * (y - y0), circle_h), xp.where(line, m, circle_s)
 
 
-def _piece_index(xp, pieces, y):
-    return xp.sum((y > pieces["breaks"]).astype(np.int32))
+def _canted_pieces(theta):
+    """Canted geometry (numpy) for a concrete inclination ``theta`` [rad]: dict of
+    ``breaks``, ``joint_z`` (6,), per piece ``yc, zc, radius`` and the line ``y0, z0, m``
+    (7,) [m]."""
+    table = _canted_table(np, np.float64(theta))
+    m = np.array([_piece_height_slope(np, row, 0.0)[1] for row in table])
+    return dict(breaks=_breaks(table), joint_z=table[1:, 7], yc=table[:, 0], zc=table[:, 4],
+                radius=table[:, 8], y0=table[:, 1], z0=table[:, 5], m=m)
 
 
 def _domain(theta: float) -> tuple[float, float]:
     """Static domain [m] for a concrete inclination (rule in the module docstring)."""
-    p = _canted_pieces(np, np.float64(theta))
+    p = _canted_pieces(theta)
     b = p["breaks"]
     lows = np.concatenate([[-np.inf], b])
     highs = np.concatenate([b, [np.inf]])
@@ -239,28 +247,29 @@ class UIC60(Profile):
     def domain(self) -> tuple[float, float]:
         return (self.y_min, self.y_max)
 
-    def _pieces(self):
-        return _canted_pieces(jnp, self.inclination)
+    def _table(self):
+        return _canted_table(jnp, self.inclination)
 
     def joints(self) -> tuple[Float[Array, "6"], Float[Array, "6"]]:
         """Canted (y, z) [m] of the six tangency points, gauge side first:
         R13/flank, R80/R13, R300/R80 (gauge), then R300/R80, R80/R13, R13/flank (field)."""
-        p = self._pieces()
-        return p["breaks"], p["joint_z"]
+        table = self._table()
+        return _breaks(table), table[1:, 7]
 
     def piece_height_slope(self, y: Float[ArrayLike, ""], piece: int) -> tuple[Array, Array]:
         """Height [m] and slope [-] at ``y`` [m] of one analytic piece, continued beyond
         its joints (pieces 0..6 from the gauge flank to the field flank)."""
         y = jnp.asarray(y, dtype=jnp.float64)
-        return _piece_height_slope(jnp, self._pieces(), y, jnp.asarray(piece))
+        return _piece_height_slope(jnp, self._table()[piece], y)
 
     def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
         y = jnp.asarray(y, dtype=jnp.float64)
         # Continue along the end tangent outside the domain; `where` rather than clip
         # keeps the derivatives exact at the ends themselves.
         y_in = jnp.where(y > self.y_max, self.y_max, jnp.where(y < self.y_min, self.y_min, y))
-        p = self._pieces()
-        h, s = _piece_height_slope(jnp, p, y_in, _piece_index(jnp, p, y_in))
+        table = self._table()
+        index = jnp.sum((y_in > _breaks(table)).astype(jnp.int32))
+        h, s = _piece_height_slope(jnp, table[index], y_in)
         return h + s * (y - y_in)
 
 

@@ -319,3 +319,12 @@ def test_derivatives_wrt_inclination_against_finite_differences():
                                        err_msg=f"{key} {name}")
         # Reverse mode (summed over the padded batch) agrees with forward mode.
         assert r["k_t_sum_reverse"] == pytest.approx(r["k_t_sum_padded"], rel=1e-9, abs=1e-9)
+
+
+def test_negative_inclination_is_the_mirror_image():
+    rail, mirrored = uic60(1 / 40), uic60(-1 / 40)
+    assert mirrored.domain == pytest.approx((-rail.domain[1], -rail.domain[0]), abs=1e-15)
+    ys = jnp.linspace(*rail.domain, 201)
+    h = jax.jit(jax.vmap(rail.height))(ys)
+    h_mirrored = jax.jit(jax.vmap(mirrored.height))(-ys)
+    np.testing.assert_allclose(h, h_mirrored, atol=1e-15)
