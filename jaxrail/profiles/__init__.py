@@ -5,6 +5,13 @@ from ._base import WheelProfile as WheelProfile
 from .files import read_profile as read_profile
 from .files import sample_profile as sample_profile
 from .files import write_profile_csv as write_profile_csv
+from .measures import flange_angle as flange_angle
+from .measures import flange_height as flange_height
+from .measures import flange_qr as flange_qr
+from .measures import flange_thickness as flange_thickness
+from .measures import gauge_point as gauge_point
+from .measures import highest_point as highest_point
+from .measures import rail_offset as rail_offset
 from .s1002 import S1002 as S1002
 from .s1002 import s1002 as s1002
 from .simplified import SimplifiedFlange as SimplifiedFlange
@@ -13,3 +20,5 @@ from .simplified import simplified_s1002 as simplified_s1002
 from .tabulated import TabulatedProfile as TabulatedProfile
 from .tabulated import tabulated_rail as tabulated_rail
 from .tabulated import tabulated_wheel as tabulated_wheel
+from .uic60 import UIC60 as UIC60
+from .uic60 import uic60 as uic60
