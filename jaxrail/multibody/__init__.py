@@ -1,0 +1,43 @@
+"""Constrained rigid multibody systems: Cartesian coordinates with Euler parameters
+(Nikravesh), joints as constraints, force elements, and eq. (19) with Baumgarte
+stabilisation integrated by diffrax. See docs/multibody.md.
+
+Static structure (`System`) and traced parameters (`SystemParams`) come from
+`build_system`; the Euler-parameter helpers are in `jaxrail.multibody.quaternion`.
+"""
+
+from . import quaternion as quaternion
+from .bodies import BodyParams as BodyParams
+from .bodies import RigidBody as RigidBody
+from .bodies import angular_velocity as angular_velocity
+from .bodies import body_pose as body_pose
+from .bodies import join_coordinates as join_coordinates
+from .bodies import split_coordinates as split_coordinates
+from .bodies import velocities_from_twists as velocities_from_twists
+from .forces import Bushing as Bushing
+from .forces import BushingParams as BushingParams
+from .forces import BumpStop as BumpStop
+from .forces import BumpStopParams as BumpStopParams
+from .forces import SpringDamper as SpringDamper
+from .forces import SpringDamperParams as SpringDamperParams
+from .joints import GROUND as GROUND
+from .joints import Fixed as Fixed
+from .joints import JointParams as JointParams
+from .joints import Prismatic as Prismatic
+from .joints import Revolute as Revolute
+from .joints import Spherical as Spherical
+from .system import System as System
+from .system import SystemParams as SystemParams
+from .system import accelerations as accelerations
+from .system import angular_momentum as angular_momentum
+from .system import build_system as build_system
+from .system import consistent_initial_conditions as consistent_initial_conditions
+from .system import constraint_violation as constraint_violation
+from .system import constraints as constraints
+from .system import generalized_forces as generalized_forces
+from .system import kinetic_energy as kinetic_energy
+from .system import mass_matrix as mass_matrix
+from .system import potential_energy as potential_energy
+from .system import quadratic_velocity as quadratic_velocity
+from .system import rhs as rhs
+from .system import simulate_system as simulate_system

@@ -1,0 +1,373 @@
+"""A constrained multibody system: assembly and the equations of motion, eq. (19).
+
+Structure and parameters are separate (DESIGN.md section 2): `System` holds only static
+topology (body count and names, and per joint or force kind the body indices of its
+elements), so changing it recompiles; `SystemParams` holds every physical number as a
+float64 array, so it can be batched (vmap) and differentiated. `build_system` makes
+both from build-time descriptions (RigidBody, Revolute, Bushing, ...).
+
+Equations of motion (Nikravesh; the paper's eq. 19 with Baumgarte stabilisation):
+
+    [ M     Phi_q^T ] [ qddot  ]   [ g + h                              ]
+    [ Phi_q 0       ] [ lambda ] = [ gamma - 2 alpha Phidot - beta^2 Phi ]
+
+with M = blockdiag(m_i I3, 4 G_i^T J'_i G_i), g the applied generalized forces
+(gravity, force elements, the `external` hook), h the quadratic velocity vector and
+Phi the normalisation constraints followed by the joints. Sign of lambda: the joint
+reactions on the bodies are -Phi_q^T lambda (for a spherical joint, -lambda is the
+force [N] on body i and +lambda the force on body j, global frame).
+"""
+
+import dataclasses
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from jaxrail._float64 import require_float64
+
+from . import bodies as bd
+from . import forces as fc
+from . import joints as jt
+
+
+@dataclasses.dataclass(frozen=True)
+class Group:
+    """Static topology of the elements of one kind: body indices (-1 = ground)."""
+
+    kind: str
+    body_i: tuple[int, ...]
+    body_j: tuple[int, ...]
+    names: tuple[str, ...]
+
+
+class System(eqx.Module):
+    """Static structure of a multibody system (no array leaves; hashable).
+
+    Fields: n_bodies; body_names; joint_groups and force_groups, one `Group` per kind
+    present, in the order of joints.JOINT_KINDS and forces.FORCE_KINDS.
+    """
+
+    n_bodies: int = eqx.field(static=True)
+    body_names: tuple[str, ...] = eqx.field(static=True)
+    joint_groups: tuple[Group, ...] = eqx.field(static=True)
+    force_groups: tuple[Group, ...] = eqx.field(static=True)
+
+    @property
+    def n_constraints(self) -> int:
+        """Rows of Phi: one normalisation per body plus the joint equations."""
+        rows = sum(jt.JOINT_KINDS[g.kind][0] * len(g.body_i) for g in self.joint_groups)
+        return self.n_bodies + rows
+
+    def find(self, name: str) -> tuple[str, str, int]:
+        """("body", "", i) or ("joint" | "force", kind, index within its kind)."""
+        if name in self.body_names:
+            return "body", "", self.body_names.index(name)
+        for what, groups in (("joint", self.joint_groups), ("force", self.force_groups)):
+            for g in groups:
+                if name in g.names:
+                    return what, g.kind, g.names.index(name)
+        raise ValueError(f"name {name!r} is not a body, joint or force element")
+
+
+class SystemParams(eqx.Module):
+    """Traced parameters: bodies, joints[kind], forces[kind], gravity (3,) [m/s^2]
+    (global), Baumgarte alpha [1/s] and beta [1/s] (scalars)."""
+
+    bodies: bd.BodyParams
+    joints: dict
+    forces: dict
+    gravity: Float[Array, " 3"]
+    baumgarte_alpha: Float[Array, ""]
+    baumgarte_beta: Float[Array, ""]
+
+
+def _f64(x):
+    return jnp.asarray(np.asarray(x, dtype=np.float64), dtype=jnp.float64)
+
+
+def _vector(x, shape, what):
+    a = np.asarray(x, dtype=np.float64)
+    if a.shape != shape or not np.all(np.isfinite(a)):
+        raise ValueError(f"{what} must be finite with shape {shape}, got {x!r}")
+    return a
+
+
+def _body_index(ref, names, what):
+    if isinstance(ref, str):
+        if ref == "ground":
+            return -1
+        if ref not in names:
+            raise ValueError(f"{what}: unknown body {ref!r}")
+        return names.index(ref)
+    if isinstance(ref, (int, np.integer)) and -1 <= int(ref) < len(names):
+        return int(ref)
+    raise ValueError(f"{what}: body must be a name, 'ground' or an index in [-1, "
+                     f"{len(names)}), got {ref!r}")
+
+
+def _resolve(element, names, what):
+    bi = _body_index(element.body_i, names, f"{what} body_i")
+    bj = _body_index(element.body_j, names, f"{what} body_j")
+    if bi == bj:
+        raise ValueError(f"{what}: body_i and body_j must differ, both are {bi}")
+    _vector(element.point_i, (3,), f"{what} point_i")
+    _vector(element.point_j, (3,), f"{what} point_j")
+    return bi, bj
+
+
+def _joint_params(specs):
+    frames = [s.frames() for s in specs]
+    return jt.JointParams(
+        point_i=_f64([s.point_i for s in specs]),
+        point_j=_f64([s.point_j for s in specs]),
+        frame_i=_f64([f[0] for f in frames]),
+        frame_j=_f64([f[1] for f in frames]),
+    )
+
+
+def _force_params(kind, specs, what):
+    pts = dict(point_i=_f64([s.point_i for s in specs]),
+               point_j=_f64([s.point_j for s in specs]))
+    if kind == "spring_damper":
+        return fc.SpringDamperParams(
+            **pts,
+            stiffness=_f64([s.stiffness for s in specs]),
+            damping=_f64([s.damping for s in specs]),
+            free_length=_f64([s.free_length for s in specs]),
+        )
+    if kind == "bushing":
+        def frame(f, side):
+            return np.eye(3) if f is None else jt._check_frame(f, f"{what} {side}")
+
+        return fc.BushingParams(
+            **pts,
+            frame_i=_f64([frame(s.frame_i, "frame_i") for s in specs]),
+            frame_j=_f64([frame(s.frame_j, "frame_j") for s in specs]),
+            stiffness=_f64([_vector(s.stiffness, (6,), f"{what} stiffness")
+                            for s in specs]),
+            damping=_f64([_vector(s.damping, (6,), f"{what} damping") for s in specs]),
+            preload=_f64([_vector(s.preload, (6,), f"{what} preload") for s in specs]),
+        )
+    axes = [_vector(s.axis_i, (3,), f"{what} axis_i") for s in specs]
+    if any(np.linalg.norm(a) == 0.0 for a in axes):
+        raise ValueError(f"{what} axis_i must be non-zero")
+    return fc.BumpStopParams(
+        **pts,
+        axis_i=_f64(axes),
+        clearance=_f64([s.clearance for s in specs]),
+        stiffness=_f64([s.stiffness for s in specs]),
+        damping=_f64([s.damping for s in specs]),
+    )
+
+
+def _groups(elements, kinds, names, what):
+    groups, by_kind = [], {}
+    for e in elements:
+        if getattr(e, "kind", None) not in kinds:
+            raise ValueError(f"{what} must be one of {sorted(kinds)}, got {e!r}")
+    for kind in kinds:
+        specs = [e for e in elements if e.kind == kind]
+        if not specs:
+            continue
+        idx = [_resolve(s, names, f"{what} {s.name or kind!r}") for s in specs]
+        groups.append(Group(kind, tuple(i for i, _ in idx), tuple(j for _, j in idx),
+                            tuple(s.name for s in specs)))
+        by_kind[kind] = specs
+    return tuple(groups), by_kind
+
+
+def build_system(bodies, joints=(), forces=(), gravity=(0.0, 0.0, 0.0),
+                 baumgarte=(10.0, 10.0)) -> tuple[System, SystemParams]:
+    """(System, SystemParams) from build-time descriptions.
+
+    Arguments:
+        bodies: sequence of RigidBody (n >= 1); body index = position in it.
+        joints: Spherical / Revolute / Prismatic / Fixed; bodies by name, index, or
+            "ground" / -1 for the fixed global frame.
+        forces: SpringDamper / Bushing / BumpStop.
+        gravity: (3,) [m/s^2], global; e.g. (0, 0, -9.81) with z up.
+        baumgarte: (alpha, beta) [1/s], feedback gains of eq. (19).
+    """
+    require_float64("a multibody system")
+    bodies = tuple(bodies)
+    if not bodies or not all(isinstance(b, bd.RigidBody) for b in bodies):
+        raise ValueError("bodies must be a non-empty sequence of RigidBody")
+    names = tuple(b.name for b in bodies)
+    if len(set(names)) != len(names) or "ground" in names:
+        raise ValueError(f"bodies must have unique names other than 'ground': {names}")
+    inertia = [b.inertia_tensor() for b in bodies]
+    alpha, beta = _vector(baumgarte, (2,), "baumgarte")
+    if alpha < 0.0 or beta < 0.0:
+        raise ValueError(f"baumgarte gains must be >= 0, got {baumgarte}")
+    joint_groups, joint_specs = _groups(tuple(joints), jt.JOINT_KINDS, names, "joint")
+    force_groups, force_specs = _groups(tuple(forces), fc.FORCE_KINDS, names, "force")
+    system = System(len(bodies), names, joint_groups, force_groups)
+    params = SystemParams(
+        bodies=bd.BodyParams(_f64([b.mass for b in bodies]), _f64(inertia)),
+        joints={k: _joint_params(s) for k, s in joint_specs.items()},
+        forces={k: _force_params(k, s, f"force {k}") for k, s in force_specs.items()},
+        gravity=_f64(_vector(gravity, (3,), "gravity")),
+        baumgarte_alpha=_f64(alpha),
+        baumgarte_beta=_f64(beta),
+    )
+    return system, params
+
+
+# ---- assembly ---------------------------------------------------------------------------
+
+
+def mass_matrix(system: System, params: SystemParams, q) -> Float[Array, "7n 7n"]:
+    """Block-diagonal mass matrix (7 n, 7 n) in the (rdot, pdot) velocities."""
+    _, p = bd.split_coordinates(q)
+    blocks = jax.vmap(bd.body_mass_matrix)(params.bodies.mass, params.bodies.inertia, p)
+    n = system.n_bodies
+    return jnp.einsum("ij,iab->iajb", jnp.eye(n), blocks).reshape(7 * n, 7 * n)
+
+
+def quadratic_velocity(system: System, params: SystemParams, q, qdot) -> Array:
+    """h (7 n,), the quadratic velocity vector 8 Gdot^T J' Gdot p of each body."""
+    _, p = bd.split_coordinates(q)
+    _, pdot = bd.split_coordinates(qdot)
+    return jax.vmap(bd.body_quadratic_velocity)(params.bodies.inertia, p, pdot).reshape(-1)
+
+
+def constraints(system: System, params: SystemParams, q, qdot):
+    """(Phi (m,), Phi_q (m, 7 n), Phidot (m,), gamma (m,)), m = system.n_constraints.
+
+    Rows: normalisation of each body, then the joints kind by kind (JOINT_KINDS order).
+    """
+    parts = [jt.normalization_terms(q, qdot)]
+    for g in system.joint_groups:
+        parts.append(jt.joint_terms(g.kind, g.body_i, g.body_j, params.joints[g.kind],
+                                    q, qdot))
+    return tuple(jnp.concatenate(x, axis=0) for x in zip(*parts))
+
+
+def generalized_forces(system: System, params: SystemParams, t, q, qdot,
+                       external=None) -> Array:
+    """Applied generalized forces g (7 n,): gravity, force elements and `external`.
+
+    external: None or a callable (t, q, qdot) -> (forces (n, 3) [N], torques (n, 3)
+    [N m]), global, applied at the centres of mass (an equinox Module carrying its own
+    parameters keeps them differentiable).
+    """
+    g = fc.gravity_forces(params.bodies.mass, params.gravity, system.n_bodies)
+    for grp in system.force_groups:
+        g = g + fc.element_forces(grp.kind, grp.body_i, grp.body_j,
+                                  params.forces[grp.kind], q, qdot)
+    if external is not None:
+        forces, torques = external(t, q, qdot)
+        g = g + fc.centre_loads(q, forces, torques)
+    return g
+
+
+def accelerations(system: System, params: SystemParams, t, q, qdot, external=None):
+    """(qddot (7 n,), lambda (m,)) from eq. (19) with Baumgarte stabilisation."""
+    q = jnp.asarray(q, dtype=jnp.float64)
+    qdot = jnp.asarray(qdot, dtype=jnp.float64)
+    mass = mass_matrix(system, params, q)
+    phi, phi_q, phidot, gamma = constraints(system, params, q, qdot)
+    rhs_top = generalized_forces(system, params, t, q, qdot, external)
+    rhs_top = rhs_top + quadratic_velocity(system, params, q, qdot)
+    alpha, beta = params.baumgarte_alpha, params.baumgarte_beta
+    rhs_bottom = gamma - 2.0 * alpha * phidot - beta**2 * phi
+    m = phi.shape[0]
+    lhs = jnp.block([[mass, phi_q.T], [phi_q, jnp.zeros((m, m), dtype=q.dtype)]])
+    sol = jnp.linalg.solve(lhs, jnp.concatenate([rhs_top, rhs_bottom]))
+    return sol[: q.shape[0]], sol[q.shape[0]:]
+
+
+def rhs(t, y, args):
+    """diffrax vector field: y = (q, qdot), args = (system, params[, external])."""
+    system, params, *rest = args
+    external = rest[0] if rest else None
+    q, qdot = y
+    qddot, _ = accelerations(system, params, t, q, qdot, external)
+    return qdot, qddot
+
+
+# ---- diagnostics --------------------------------------------------------------------
+
+
+def constraint_violation(system: System, params: SystemParams, q, qdot):
+    """(max |Phi|, max |Phidot|) over all constraint rows (m or -, m/s or 1/s)."""
+    phi, _, phidot, _ = constraints(system, params, q, qdot)
+    return jnp.max(jnp.abs(phi)), jnp.max(jnp.abs(phidot))
+
+
+def kinetic_energy(system: System, params: SystemParams, q, qdot) -> Array:
+    """Total kinetic energy [J]."""
+    _, p = bd.split_coordinates(q)
+    rdot, pdot = bd.split_coordinates(qdot)
+    b = params.bodies
+    return jnp.sum(jax.vmap(bd.body_kinetic_energy)(b.mass, b.inertia, p, rdot, pdot))
+
+
+def potential_energy(system: System, params: SystemParams, q) -> Array:
+    """Gravity (-m g . r) plus the energy stored in the force elements [J]."""
+    r, _ = bd.split_coordinates(q)
+    v = -jnp.sum(params.bodies.mass * (r @ params.gravity))
+    for g in system.force_groups:
+        v = v + fc.element_potential(g.kind, g.body_i, g.body_j,
+                                     params.forces[g.kind], q)
+    return v
+
+
+def angular_momentum(system: System, params: SystemParams, q, qdot) -> Array:
+    """Total angular momentum (3,) [kg m^2/s] about the global origin, global frame."""
+    r, p = bd.split_coordinates(q)
+    rdot, pdot = bd.split_coordinates(qdot)
+    b = params.bodies
+    each = jax.vmap(bd.body_angular_momentum)(b.mass, b.inertia, r, p, rdot, pdot)
+    return jnp.sum(each, axis=0)
+
+
+def consistent_initial_conditions(system: System, params: SystemParams, q0, qdot0,
+                                  iterations: int = 12):
+    """(q, qdot) with Phi(q) = 0 and Phi_q qdot = 0, nearest to (q0, qdot0).
+
+    A fixed number of Gauss-Newton steps with the minimum-norm correction
+    q <- q - pinv(Phi_q) Phi, then the Euclidean projection of qdot0 onto the null
+    space of Phi_q (coordinates and velocities mixed without weights, so give a good
+    guess for the coordinates you care about).
+    """
+    zeros = jnp.zeros_like(jnp.asarray(qdot0, dtype=jnp.float64))
+
+    def step(_, q):
+        phi, phi_q, _, _ = constraints(system, params, q, zeros)
+        return q - jnp.linalg.pinv(phi_q) @ phi
+
+    q = jax.lax.fori_loop(0, iterations, step, jnp.asarray(q0, dtype=jnp.float64))
+    _, phi_q, _, _ = constraints(system, params, q, zeros)
+    qdot0 = jnp.asarray(qdot0, dtype=jnp.float64)
+    return q, qdot0 - jnp.linalg.pinv(phi_q) @ (phi_q @ qdot0)
+
+
+def simulate_system(system: System, params: SystemParams, q0, qdot0, t1, dt0=1e-3,
+                    saveat=None, rtol=1e-8, atol=1e-8, solver=None, t0=0.0,
+                    external=None, max_steps=100_000, adjoint=None, throw=True):
+    """Integrate eq. (19) with diffrax from (q0, qdot0) at t0 [s] to t1 [s].
+
+    Returns diffrax's Solution, with ys = (q (..., 7 n), qdot (..., 7 n)) at `saveat`
+    (default: t1 only). solver defaults to Tsit5, the step size to a PIDController
+    with rtol, atol; adjoint to RecursiveCheckpointAdjoint (reverse-mode AD works).
+    """
+    y0 = (jnp.asarray(q0, dtype=jnp.float64), jnp.asarray(qdot0, dtype=jnp.float64))
+    return diffrax.diffeqsolve(
+        diffrax.ODETerm(rhs),
+        diffrax.Tsit5() if solver is None else solver,
+        t0,
+        t1,
+        dt0,
+        y0,
+        args=(system, params, external),
+        saveat=diffrax.SaveAt(t1=True) if saveat is None else saveat,
+        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol),
+        max_steps=max_steps,
+        adjoint=diffrax.RecursiveCheckpointAdjoint() if adjoint is None else adjoint,
+        throw=throw,
+    )
