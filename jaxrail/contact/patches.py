@@ -45,7 +45,8 @@ def find_patches(
         candidate_depth: tolerance [m] on the parabola peak of a local maximum.
 
     Returns ``(index, found, n_runs)``: per slot the deepest strip of one of the
-    ``max_patches`` deepest runs (in lateral order), whether the slot holds a run, and
+    ``max_patches`` deepest runs (in lateral order, empty slots last), whether the slot
+    holds a run, and
     the number of runs found (runs beyond ``max_patches`` are dropped).
     """
     # Neighbours outside the rail domain still give a continuous depth (to the tangent
@@ -59,8 +60,10 @@ def find_patches(
     run_depth = jax.ops.segment_max(jnp.where(member, depth, _NO_PATCH), run, num_segments=n + 1)
     run_depth = run_depth.at[0].set(2.0 * _NO_PATCH)
     _, labels = jax.lax.top_k(run_depth, max_patches)
-    labels = jnp.sort(labels)
     found = run_depth[labels] > _NO_PATCH
+    # Runs in lateral order, empty slots last.
+    order = jnp.argsort(jnp.where(found, labels, labels + n + 1))
+    labels, found = labels[order], found[order]
     slots = labels[:, None] == run[None, :]
     index = jnp.argmax(jnp.where(slots, depth[None, :], _NO_PATCH), axis=1)
     return index, found, jnp.max(run)

@@ -1,0 +1,162 @@
+"""The paper's contact search: analytic cases, eqs. (12)-(13) corrected, penetration,
+lift-off, sub-strip refinement, gradients, vmap."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrail.contact import SearchConfig, search_vehicle, search_wheelset, wheelset_pose
+from jaxrail.contact.strip import longitudinal_offset, wheel_frame
+from jaxrail.profiles import s1002
+from jaxrail.profiles.analytic import CircularProfile, conical_wheel
+from jaxrail.profiles.measures import rail_offset
+from jaxrail.profiles.uic60 import uic60
+from jaxrail.track import rail_frame, straight_track
+
+TRACK = straight_track(20.0)
+STATION = 10.0
+WHEEL, RAIL = s1002(), uic60()
+OFFSET = float(rail_offset(RAIL))
+
+
+@jax.jit
+def real_search(lateral, vertical, roll, yaw):
+    position, rotation = wheelset_pose(TRACK, STATION, lateral, vertical, roll, yaw)
+    return search_wheelset(WHEEL, RAIL, TRACK, OFFSET, position, rotation, SearchConfig(), STATION)
+
+
+def touching_height(lateral, roll=0.0, yaw=0.0):
+    """Wheelset height at which the deepest wheel just touches (bisection)."""
+    lo, hi = 0.455, 0.47
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        deepest = float(jnp.max(real_search(lateral, mid, roll, yaw).penetration))
+        lo, hi = (mid, hi) if deepest > 0.0 else (lo, mid)
+    return hi
+
+
+def test_coned_wheel_on_circular_head_analytic():
+    """Cone angle g on a circular head of radius R: the contact lies where the head's
+    slope equals the cone's, u_r = -R sin(g), with contact angle g; lowering the
+    wheelset by d from touching gives the normal penetration d cos(g) exactly."""
+    cone, head, lowered = 0.05, 0.3, 1e-6
+    wheel, rail = conical_wheel(cone), CircularProfile(head, half_width=0.03)
+    u = -head * np.sin(cone)
+    touching = 0.46 + np.tan(cone) * head * np.sin(cone) - head * (1.0 - np.cos(cone))
+    position, rotation = wheelset_pose(TRACK, STATION, 0.0, touching - lowered, 0.0, 0.0)
+    out = jax.jit(search_wheelset)(wheel, rail, TRACK, 0.75, position, rotation, SearchConfig(), STATION)
+    assert out.active[:, 0].tolist() == [True, True]
+    assert not bool(jnp.any(out.active[:, 1:]))
+    np.testing.assert_allclose(out.penetration[:, 0], lowered * np.cos(cone), rtol=1e-7)
+    np.testing.assert_allclose(out.y_rail[:, 0], u, atol=1e-9)
+    np.testing.assert_allclose(out.y_wheel[:, 0], u, atol=1e-7)
+    np.testing.assert_allclose(out.contact_angle[:, 0], cone, atol=1e-8)
+    np.testing.assert_allclose(out.rolling_radius[:, 0], 0.46 - np.tan(cone) * u, atol=1e-9)
+    np.testing.assert_allclose(out.curvature_rail_y[:, 0], 1.0 / head, rtol=1e-8)
+    np.testing.assert_allclose(out.curvature_wheel_y[:, 0], 0.0, atol=1e-12)
+    np.testing.assert_allclose(out.y_track[:, 0], [0.75 + u, -(0.75 + u)], atol=1e-9)
+    np.testing.assert_allclose(out.normal[0, 0], [0.0, -np.sin(cone), np.cos(cone)], atol=1e-9)
+    np.testing.assert_allclose(out.normal[1, 0], [0.0, np.sin(cone), np.cos(cone)], atol=1e-9)
+
+
+def test_corrected_eq12_and_eq13_with_yaw():
+    """With yaw, the wheel normal at s_w (eq. 12 with the slope F') is perpendicular to
+    the rail tangent, and the contact's longitudinal offset equals eq. (13) with F',
+    not the OCR's form with F."""
+    yaw = 0.01
+    out = real_search(2e-3, touching_height(2e-3, yaw=yaw) - 2e-5, 0.0, yaw)
+    position, rotation = wheelset_pose(TRACK, STATION, 2e-3, 0.46, 0.0, yaw)
+    surface = WHEEL.surfaces[0]
+    for side, k in ((1.0, 0), (-1.0, 1)):
+        _, axes = rail_frame(TRACK, float(out.s_rail[k, 0]), side, OFFSET)
+        frame = wheel_frame(rotation[:, 1], axes[:, 0])
+        y = out.y_wheel[k, 0]
+        radius, slope = 0.46 + surface.height(y), surface.slope(y)
+        expected = longitudinal_offset(y, radius, slope, frame, side)
+        assert float(out.dx[k, 0]) == pytest.approx(float(expected), abs=1e-10)
+        ocr = side * (jnp.abs(radius) * surface.height(y) - y) * frame.sin_alpha
+        assert abs(float(out.dx[k, 0]) - float(ocr)) > 1e-5
+        # Independent normal: cross product of the surface's tangents by autodiff.
+        def point(y_w, theta):
+            radial = -jnp.cos(theta) * frame.up + jnp.sin(theta) * frame.forward
+            return side * y_w * frame.axle + (0.46 + surface.height(y_w)) * radial
+        t_y = jax.jacfwd(point, 0)(y, out.s_wheel[k, 0])
+        t_theta = jax.jacfwd(point, 1)(y, out.s_wheel[k, 0])
+        normal = jnp.cross(t_y, t_theta)
+        assert abs(float(normal @ axes[:, 0] / jnp.linalg.norm(normal))) < 1e-12
+        assert abs(float(out.dx[k, 0])) > 1e-5  # yaw really moves the contact point
+
+
+def test_lowering_gives_penetration_d_cos_gamma():
+    height = touching_height(0.0)
+    d = 5e-5
+    out = real_search(0.0, height - d, 0.0, 0.0)
+    gamma = out.contact_angle[:, 0]
+    np.testing.assert_allclose(out.penetration[:, 0], d * np.cos(gamma), rtol=2e-3)
+
+
+def test_lift_off_clears_mask_with_finite_gradients():
+    out = real_search(0.0, 0.4625, 0.0, 0.0)
+    assert not bool(jnp.any(out.active))
+    assert float(jnp.max(out.penetration)) == 0.0
+
+    def total(vertical):
+        return jnp.sum(real_search(0.0, vertical, 0.0, 0.0).penetration)
+
+    gradient = jax.grad(total)(0.4625)
+    assert np.isfinite(float(gradient)) and float(gradient) == 0.0
+
+
+def test_sub_strip_refinement_is_continuous_and_accurate():
+    """The left wheel's contact moves continuously with the shift (not in strip steps)
+    and agrees with a 10x finer strip grid to 0.01 mm."""
+    shifts = np.linspace(0.5e-3, 4e-3, 16)  # between the jumps at 0 and ~4.7 mm
+    height = touching_height(0.0) - 2e-5
+    fine = SearchConfig(strip_spacing=1e-4)
+
+    @jax.jit
+    def both(lateral):
+        position, rotation = wheelset_pose(TRACK, STATION, lateral, height, 0.0, 0.0)
+        coarse = search_wheelset(WHEEL, RAIL, TRACK, OFFSET, position, rotation, SearchConfig(), STATION)
+        dense = search_wheelset(WHEEL, RAIL, TRACK, OFFSET, position, rotation, fine, STATION)
+        return coarse.y_wheel[0, 0], dense.y_wheel[0, 0], coarse.active[0, 0], dense.active[0, 0]
+
+    coarse, dense, on_coarse, on_dense = (np.asarray(a) for a in jax.lax.map(both, jnp.asarray(shifts)))
+    assert on_coarse.all() and on_dense.all()
+    np.testing.assert_allclose(coarse, dense, atol=1e-5)
+    steps = np.diff(coarse)  # smooth increments, not jumps between strips 1 mm apart
+    assert np.all(steps < 0.0) and np.max(np.abs(np.diff(steps))) < 0.05e-3
+
+
+def test_gradients_against_finite_differences():
+    height = touching_height(1e-3) - 3e-5
+
+    def outputs(pose):
+        out = real_search(pose[0], pose[1], pose[2], pose[3])
+        return jnp.stack([out.penetration[0, 0], out.penetration[1, 0],
+                          out.y_wheel[0, 0], out.y_rail[1, 0], out.dx[0, 0]])
+
+    pose = jnp.array([1e-3, height, 2e-4, 3e-3])
+    jacobian = jax.jacfwd(outputs)(pose)
+    steps = np.array([1e-7, 1e-8, 1e-7, 1e-6])
+    for j, h in enumerate(steps):
+        e = np.zeros(4)
+        e[j] = h
+        fd = (outputs(pose + e) - outputs(pose - e)) / (2 * h)
+        np.testing.assert_allclose(jacobian[:, j], fd, rtol=2e-3, atol=1e-6 * np.max(np.abs(fd)) + 1e-9)
+    assert np.all(np.isfinite(jax.jacrev(outputs)(pose)))
+
+
+def test_vehicle_vmap_equals_loop():
+    laterals = jnp.array([0.0, 1e-3, -2e-3, 4e-3])
+    heights = jnp.array([0.46, 0.4599, 0.4598, 0.4599])
+    yaws = jnp.array([0.0, 1e-3, -2e-3, 0.0])
+    poses = [wheelset_pose(TRACK, STATION - 2.0 * k, laterals[k], heights[k], 0.0, yaws[k]) for k in range(4)]
+    positions = jnp.stack([p for p, _ in poses])
+    rotations = jnp.stack([r for _, r in poses])
+    batched = jax.jit(search_vehicle)(WHEEL, RAIL, TRACK, OFFSET, positions, rotations)
+    for k in range(4):
+        single = jax.jit(search_wheelset)(WHEEL, RAIL, TRACK, OFFSET, positions[k], rotations[k])
+        for field in ("penetration", "y_wheel", "y_rail", "dx", "normal", "active"):
+            np.testing.assert_allclose(getattr(batched, field)[k], getattr(single, field), atol=1e-12)
