@@ -56,6 +56,7 @@ def save_figure(fig, path):
     os.close(handle)
     try:
         fig.savefig(temporary, bbox_inches="tight")
+        os.chmod(temporary, 0o644)
         os.replace(temporary, path)
     finally:
         plt.close(fig)
