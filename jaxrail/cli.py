@@ -55,6 +55,63 @@ def _profile_command(args):
     return 0
 
 
+def _geometry_command(args):
+    import math
+
+    from . import profiles
+    from .geometry.report import geometry_report, report_csv, report_json, shift_grid_mm, write_text
+
+    def load(option, name, kind):
+        path = Path(name)
+        try:
+            if path.suffix.lower() in (".csv", ".txt") and path.exists():
+                return profiles.read_profile(path, kind=kind)
+            found, profile = _load_profile(name, args.inclination)
+        except ValueError as error:
+            raise ValueError(f"{option}: {error}") from None
+        if found != kind:
+            raise ValueError(f"{option}: {name} is a {found} profile, not a {kind} profile")
+        return profile
+
+    shifts_mm = shift_grid_mm(args.shift_from, args.shift_to, args.shift_step)
+    if not (math.isfinite(args.gauge) and args.gauge > 0.0):
+        raise ValueError(f"--gauge must be a positive length in mm, got {args.gauge}")
+    if not math.isfinite(args.yaw_per_shift):
+        raise ValueError(f"--yaw-per-shift must be finite, got {args.yaw_per_shift}")
+    if args.rail.lower() == "uic60":
+        try:
+            profiles.uic60(args.inclination)
+        except ValueError as error:
+            raise ValueError(f"--inclination: {error}") from None
+    wheel = load("--wheel", args.wheel, "wheel")
+    rail = load("--rail", args.rail, "rail")
+    settings = {"wheel": args.wheel, "rail": args.rail, "inclination": args.inclination,
+                "gauge_mm": args.gauge, "yaw_per_shift": args.yaw_per_shift,
+                "yaw_per_shift_unit": "mrad/mm", "shift_from_mm": args.shift_from,
+                "shift_to_mm": args.shift_to, "shift_step_mm": args.shift_step}
+    report, _ = geometry_report(wheel, rail, shifts_mm, args.gauge, args.yaw_per_shift, settings)
+    if report["max_residual_mm"] > 1e-6:
+        print(f"jaxrail geometry: warning: wheel-rail contact solve residual "
+              f"{report['max_residual_mm']:.3g} mm", file=sys.stderr)
+    missing = [c["amplitude_mm"] for c in report["conicity"] if c["tan_gamma_e"] is None]
+    if missing:
+        print(f"jaxrail geometry: note: the shift range does not cover amplitudes {missing} mm;"
+              " their conicity is null", file=sys.stderr)
+    text = report_json(report) if args.format == "json" else report_csv(report)
+    if args.out:
+        write_text(args.out, text)
+        print(f"wrote {len(report['rows'])} shifts to {args.out}", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    if args.plot:
+        from .plots.geometry import plot_geometry
+
+        offset_mm = 1e3 * float(profiles.rail_offset(rail, 1e-3 * args.gauge))
+        plot_geometry(report, wheel, rail, offset_mm, args.plot)
+        print(f"wrote {args.plot}", file=sys.stderr)
+    return 0
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="jaxrail", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -68,6 +125,23 @@ def build_parser():
     profile.add_argument("--csv", help="write the points (y_mm,z_mm) to this CSV file")
     profile.add_argument("--plot", help="write a PNG of the wheel on the rail")
     profile.set_defaults(run=_profile_command)
+
+    geometry = commands.add_parser(
+        "geometry", help="quasi-static wheel-rail geometry: contact points, delta r, conicity")
+    geometry.add_argument("--wheel", default="s1002",
+                          help="s1002, s1002-simplified, or a .prw/.csv wheel profile file")
+    geometry.add_argument("--rail", default="uic60", help="uic60 or a .prr rail profile file")
+    geometry.add_argument("--inclination", default="1:40", help="uic60 inclination: 1:40, 1:20, none")
+    geometry.add_argument("--gauge", type=float, default=1435.0, help="track gauge [mm]")
+    geometry.add_argument("--shift-from", type=float, default=-10.0, help="first shift [mm], + left")
+    geometry.add_argument("--shift-to", type=float, default=10.0, help="last shift [mm]")
+    geometry.add_argument("--shift-step", type=float, default=0.5, help="shift step [mm]")
+    geometry.add_argument("--yaw-per-shift", type=float, default=0.0,
+                          help="yaw angle per shift [mrad/mm] (= rad/m), + turns left")
+    geometry.add_argument("--format", choices=("json", "csv"), default="json", help="output format")
+    geometry.add_argument("--out", help="write the table to this file (default: stdout)")
+    geometry.add_argument("--plot", help="write a PNG of delta r, contact angles and contact points")
+    geometry.set_defaults(run=_geometry_command)
     return parser
 
 
