@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 from jaxrail.cli import main
-from jaxrail.geometry import equivalent_conicity
 
 BASE = ["geometry", "--wheel", "s1002", "--rail", "uic60", "--inclination", "1:40",
         "--gauge", "1435", "--shift-from", "-2", "--shift-to", "2", "--shift-step", "1"]
@@ -72,8 +71,9 @@ def test_json_values(run):
 
 
 def test_json_conicity(run):
-    """Amplitudes 1 and 2 mm are covered by -2..2 mm, 3..6 mm are not (null); the 1 mm
-    value equals the integral method on the table's own dr samples (in metres)."""
+    """Amplitudes 1 and 2 mm are covered by -2..2 mm, 3..6 mm are not (null). On a 1 mm
+    grid the linearly interpolated, antisymmetric dr is a cone within +-1 mm, so the 1 mm
+    value is analytic: tan(gamma_e) = dr(1 mm) / (2 * 1 mm)."""
     report = run[0]
     entries = report["conicity"]
     assert [c["amplitude_mm"] for c in entries] == [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]
@@ -81,10 +81,9 @@ def test_json_conicity(run):
     assert all(isinstance(c["tan_gamma_e"], float) for c in entries[:2])
     shifts = 1e-3 * np.array([row["shift_mm"] for row in report["rows"]])
     delta_r = 1e-3 * np.array([row["delta_r_mm"] for row in report["rows"]])
-    expected = float(equivalent_conicity(shifts, delta_r, [1e-3], 0.75, 0.46)[0])
-    assert entries[0]["tan_gamma_e"] == pytest.approx(expected, rel=1e-9)
-    # linear interpolation of dr on a 1 mm grid: tan(gamma_e)(1 mm) = dr(1 mm) / (2 * 1 mm)
+    assert shifts[3] == pytest.approx(1e-3)
     assert entries[0]["tan_gamma_e"] == pytest.approx(delta_r[3] / 2e-3, rel=1e-9)
+    assert 0.1 < entries[1]["tan_gamma_e"] < 0.6
 
 
 def test_csv_and_plot(run, capsys):
