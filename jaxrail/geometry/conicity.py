@@ -45,6 +45,7 @@ def _potential(shifts, delta_r, scale):
     return lambda y: scale * (integral_to(y) - origin)
 
 
+@jax.jit
 def equivalent_conicity(shifts, delta_r, amplitudes, half_contact_distance=0.75,
                         nominal_radius=0.46):
     """Equivalent conicity ``tan(gamma_e)`` [-] for each amplitude [m] (EN 15302 integral

@@ -53,6 +53,7 @@ class WheelsetGeometry(eqx.Module):
         return jnp.take_along_axis(values, self.main[..., None], axis=2)[..., 0]
 
 
+@jax.jit
 def wheelset_geometry(wheel, rail, shifts, gauge=1.435, yaw_per_shift=0.0,
                       virtual_penetration=1.0e-6, config: SearchConfig = SearchConfig()):
     """Quasi-static geometry of a wheelset shifted across straight track.
@@ -67,6 +68,9 @@ def wheelset_geometry(wheel, rail, shifts, gauge=1.435, yaw_per_shift=0.0,
             are the strips penetrating at that depth (1e-6 m = 0.001 mm by default, far
             below elastic approaches, so positions are those of rigid contact).
         config: search settings.
+
+    Jitted (the entry point): calls with the same profile types and shift count reuse
+    one compilation.
     """
     shifts = jnp.asarray(shifts, dtype=jnp.float64)
     track = straight_track(_TRACK_LENGTH)

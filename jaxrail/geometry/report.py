@@ -28,10 +28,6 @@ _PATCH_FIELDS = (("y_track_mm", "y_track"), ("y_wheel_mm", "y_wheel"),
                  ("rolling_radius_mm", "rolling_radius"), ("contact_angle_rad", "contact_angle"),
                  ("penetration_mm", "penetration"))
 
-# One jit wrapper per process: repeated reports with the same shapes and profile types
-# reuse the compilation.
-_geometry = jax.jit(wheelset_geometry)
-_conicity = jax.jit(equivalent_conicity)
 
 
 def shift_grid_mm(shift_from, shift_to, shift_step):
@@ -69,7 +65,7 @@ def conicity_entries(shifts_m, delta_r_m, nominal_radius_m, amplitudes_mm=CONICI
     range does not cover the amplitude (see :func:`_covered`)."""
     shifts_m, delta_r_m = np.asarray(shifts_m), np.asarray(delta_r_m)
     amplitudes_m = 1e-3 * np.asarray(amplitudes_mm, dtype=np.float64)
-    values = np.asarray(_conicity(jnp.asarray(shifts_m), jnp.asarray(delta_r_m),
+    values = np.asarray(equivalent_conicity(jnp.asarray(shifts_m), jnp.asarray(delta_r_m),
                                   jnp.asarray(amplitudes_m), HALF_CONTACT_DISTANCE,
                                   jnp.asarray(nominal_radius_m, dtype=jnp.float64)))
     return [{"amplitude_mm": float(a),
@@ -113,7 +109,7 @@ def geometry_report(wheel, rail, shifts_mm, gauge_mm=1435.0, yaw_per_shift=0.0, 
     "conicity"}`` and the :class:`WheelsetGeometry`.
     """
     shifts_m = 1e-3 * np.asarray(shifts_mm, dtype=np.float64)
-    result = _geometry(wheel, rail, jnp.asarray(shifts_m),
+    result = wheelset_geometry(wheel, rail, jnp.asarray(shifts_m),
                        jnp.asarray(1e-3 * gauge_mm, dtype=jnp.float64),
                        jnp.asarray(yaw_per_shift, dtype=jnp.float64))
     report = {

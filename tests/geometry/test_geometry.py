@@ -14,7 +14,14 @@ from jaxrail.profiles.uic60 import uic60
 from jaxrail.profiles.measures import rail_offset
 
 SHIFTS = np.round(np.arange(-10.0, 10.001, 0.5), 6) * 1e-3
-geometry = jax.jit(wheelset_geometry)
+
+
+def geometry(wheel, rail, shifts):
+    """The jitted entry point, called as the CLI calls it (41 shifts, float64 gauge and
+    yaw rate), so that the tests and the CLI tests share one compilation per wheel."""
+    return wheelset_geometry(wheel, rail, shifts, jnp.asarray(1.435, dtype=jnp.float64),
+                             jnp.asarray(0.0, dtype=jnp.float64))
+
 
 
 @pytest.fixture(scope="module")
@@ -91,24 +98,27 @@ def test_flange_contact_angle_and_track_position(real):
     assert 0.715 < y_track < 0.725  # the gauge corner, 717.5 mm is the gauge point
 
 
-def _at_jump(wheel, on_first_side, lo, hi, steps=34):
-    """Geometry at the shift where the left wheel's main contact jumps: bisection on
-    ``on_first_side(result)`` between ``lo`` (True) and ``hi`` (False)."""
-    solve = lambda shift: geometry(wheel, uic60(), jnp.asarray([shift]))  # noqa: E731
-    assert on_first_side(solve(lo)) and not on_first_side(solve(hi))
-    for _ in range(steps):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if on_first_side(solve(mid)) else (lo, mid)
-    return solve(0.5 * (lo + hi))
+def _at_jump(wheel, on_first_side, lo, hi, rounds=4):
+    """Geometry at the shift where the left wheel's main contact jumps: grids of 41
+    shifts (the one compiled shape), each refined around the switch of
+    ``on_first_side(result) -> bool array`` (True before the jump)."""
+    for _ in range(rounds):
+        shifts = jnp.linspace(lo, hi, SHIFTS.size)
+        result = geometry(wheel, uic60(), shifts)
+        first = np.asarray(on_first_side(result))
+        assert first[0] and not first[-1]
+        k = int(np.argmin(first))  # first shift past the jump
+        lo, hi = float(shifts[k - 1]), float(shifts[k])
+    return result, k
 
 
 def test_two_point_contact_real_profile():
     """At the shift where the contact jumps from the tread to the throat, both points
     touch: two patches on one wheel."""
-    result = _at_jump(s1002(), lambda r: float(r.main_patch("y_wheel")[0, 0]) > -0.02, 4.5e-3, 5.0e-3)
-    on = np.asarray(result.patches.active[0, 0])
+    result, k = _at_jump(s1002(), lambda r: r.main_patch("y_wheel")[:, 0] > -0.02, 4.5e-3, 5.0e-3)
+    on = np.asarray(result.patches.active[k - 1, 0])
     assert on.sum() == 2
-    y = np.sort(np.asarray(result.patches.y_wheel[0, 0])[on])
+    y = np.sort(np.asarray(result.patches.y_wheel[k - 1, 0])[on])
     assert y[0] < -0.025 and y[1] > -0.018  # one in the throat, one on the tread
 
 
@@ -117,12 +127,12 @@ def test_simplified_profile_two_patches():
     each: centred only the tread touches; where the rail's gauge corner sits in the V
     between them, both touch (the paper's Fig. 4a)."""
     wheel = simplified_s1002()
-    centred = geometry(wheel, uic60(), jnp.asarray([0.0]))
-    assert np.asarray(centred.patches.active[0, 0]).tolist() == [True, False]
-    result = _at_jump(wheel, lambda r: int(r.main_patch("surface")[0, 0]) == 0, 3e-3, 9e-3)
-    assert np.asarray(result.patches.active[0, 0]).tolist() == [True, True]
-    assert np.asarray(result.patches.surface[0, 0]).tolist() == [0, 1]
-    angles = np.asarray(result.patches.contact_angle[0, 0])
+    centred = geometry(wheel, uic60(), jnp.asarray(SHIFTS)).patches.active[20, 0]
+    assert np.asarray(centred).tolist() == [True, False]
+    result, k = _at_jump(wheel, lambda r: r.main_patch("surface")[:, 0] == 0, 0.0, 9e-3)
+    assert np.asarray(result.patches.active[k - 1, 0]).tolist() == [True, True]
+    assert np.asarray(result.patches.surface[k - 1, 0]).tolist() == [0, 1]
+    angles = np.asarray(result.patches.contact_angle[k - 1, 0])
     assert angles[0] < 0.4 and angles[1] > 1.0  # tread (near the V) and steep flange
 
 
@@ -143,6 +153,7 @@ def test_conicity_matches_integrated_klingel_wavelength():
         rhs = lambda x, s: [s[1], -np.interp(s[0], y, dr) / (2 * e * r0)]  # noqa: E731
         turning = lambda x, s: s[1]  # noqa: E731
         turning.direction = 1.0
+        turning.terminal = True
         solution = solve_ivp(rhs, [0, 200], [amplitude, 0.0], events=turning, rtol=1e-12, atol=1e-15)
         wavelength = 2.0 * solution.t_events[0][0]
         expected = e * r0 * (2 * np.pi / wavelength) ** 2
