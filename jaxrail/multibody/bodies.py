@@ -3,7 +3,8 @@
 Coordinates: body i has q_i = (r_i, p_i) (7,), r_i [m] the global position of its centre
 of mass and p_i its Euler parameters (scalar first, see `quaternion`). The system
 vector is q = (q_0, ..., q_{n-1}) (7 n,). Velocities are the time derivatives
-qdot = (rdot_i, pdot_i), **not** angular velocities; `velocities_from_twists` builds them.
+qdot = (rdot_i, pdot_i), **not** angular velocities (`velocities_from_twists` builds
+them from angular velocities).
 
 With omega' = 2 G pdot the kinetic energy of body i is
 
@@ -16,6 +17,7 @@ p; the normalisation constraint p^T p = 1 (in `joints`) removes that direction.
 """
 
 import dataclasses
+from typing import NamedTuple
 
 import equinox as eqx
 import jax
@@ -79,14 +81,16 @@ def split_coordinates(q: Float[ArrayLike, " 7n"]) -> tuple[Array, Array]:
 
 
 def join_coordinates(r: Float[ArrayLike, "n 3"], p: Float[ArrayLike, "n 4"]) -> Array:
-    """The system vector (7 n,) from positions r (n, 3) and Euler parameters p (n, 4)."""
+    """System vector (7 n,) from positions r (n, 3) and Euler parameters p (n, 4)."""
     r = jnp.asarray(r, dtype=jnp.float64)
     p = jnp.asarray(p, dtype=jnp.float64)
     return jnp.concatenate([r, p], axis=1).reshape(-1)
 
 
 def velocities_from_twists(
-    q: Float[ArrayLike, " 7n"], v: Float[ArrayLike, "n 3"], omega: Float[ArrayLike, "n 3"]
+    q: Float[ArrayLike, " 7n"],
+    v: Float[ArrayLike, "n 3"],
+    omega: Float[ArrayLike, "n 3"],
 ) -> Array:
     """qdot (7 n,) from centre velocities v [m/s] and angular velocities omega [rad/s],
     both (n, 3) in the global frame."""
@@ -98,7 +102,7 @@ def velocities_from_twists(
 def body_mass_matrix(mass, inertia, p) -> Float[Array, "7 7"]:
     """diag(m I3, 4 G^T J' G) (7, 7) of one body; mass [kg], inertia (3, 3), p (4,)."""
     g = qt.g_matrix(p)
-    m_rot = 4.0 * g.T @ inertia @ g
+    m_rot = 4.0 * qt.matmul(g.T, qt.matmul(inertia, g))
     top = jnp.concatenate([mass * jnp.eye(3), jnp.zeros((3, 4))], axis=1)
     bottom = jnp.concatenate([jnp.zeros((4, 3)), m_rot], axis=1)
     return jnp.concatenate([top, bottom], axis=0)
@@ -111,14 +115,14 @@ def body_quadratic_velocity(inertia, p, pdot) -> Float[Array, " 7"]:
     Equivalent, up to a multiple of p, to -2 G^T (omega' x J' omega').
     """
     gdot = qt.g_matrix(pdot)
-    h_p = 8.0 * gdot.T @ (inertia @ (gdot @ p))
+    h_p = 8.0 * qt.matvec(gdot.T, qt.matvec(inertia, qt.matvec(gdot, p)))
     return jnp.concatenate([jnp.zeros(3), h_p])
 
 
 def body_kinetic_energy(mass, inertia, p, rdot, pdot) -> Float[Array, ""]:
     """T [J] of one body: 1/2 m v^2 + 1/2 omega'^T J' omega', omega' = 2 G pdot."""
-    w = 2.0 * qt.g_matrix(p) @ pdot
-    return 0.5 * mass * rdot @ rdot + 0.5 * w @ (inertia @ w)
+    w = 2.0 * qt.matvec(qt.g_matrix(p), pdot)
+    return 0.5 * mass * qt.dot(rdot, rdot) + 0.5 * qt.dot(w, qt.matvec(inertia, w))
 
 
 def body_angular_momentum(mass, inertia, r, p, rdot, pdot) -> Float[Array, " 3"]:
@@ -126,12 +130,13 @@ def body_angular_momentum(mass, inertia, r, p, rdot, pdot) -> Float[Array, " 3"]
 
     m r x rdot + A J' omega'.
     """
-    w = 2.0 * qt.g_matrix(p) @ pdot
-    return mass * jnp.cross(r, rdot) + qt.rotation_matrix(p) @ (inertia @ w)
+    w = 2.0 * qt.matvec(qt.g_matrix(p), pdot)
+    spin = qt.matvec(qt.rotation_matrix(p), qt.matvec(inertia, w))
+    return mass * jnp.cross(r, rdot) + spin
 
 
 def body_pose(q: Float[ArrayLike, " 7n"], i: int) -> tuple[Array, Array]:
-    """(r_i (3,) [m], A_i (3, 3)) of body i: centre position and body-to-global matrix."""
+    """(r_i (3,) [m], A_i (3, 3)) of body i: centre position, body-to-global matrix."""
     r, p = split_coordinates(q)
     return r[i], qt.rotation_matrix(p[i])
 
@@ -142,12 +147,13 @@ def angular_velocity(
     """(omega (3,) global, omega' (3,) body frame) [rad/s] of body i."""
     _, p = split_coordinates(q)
     _, pdot = split_coordinates(qdot)
-    return 2.0 * qt.e_matrix(p[i]) @ pdot[i], 2.0 * qt.g_matrix(p[i]) @ pdot[i]
+    return (2.0 * qt.matvec(qt.e_matrix(p[i]), pdot[i]),
+            2.0 * qt.matvec(qt.g_matrix(p[i]), pdot[i]))
 
 
 def point_position(r, p, point) -> Float[Array, " 3"]:
-    """Global position [m] (3,) of the body point with body-frame coordinates `point`."""
-    return r + qt.rotation_matrix(p) @ point
+    """Global position [m] (3,) of the body point `point` (body-frame coordinates)."""
+    return r + qt.matvec(qt.rotation_matrix(p), point)
 
 
 def point_velocity(p, rdot, pdot, point) -> Float[Array, " 3"]:
@@ -156,17 +162,86 @@ def point_velocity(p, rdot, pdot, point) -> Float[Array, " 3"]:
     d/dt A is the exact derivative of the quadratic A(p) along pdot, so that velocities
     are consistent with `point_position` even when |p| is not exactly 1.
     """
-    return rdot + _rotation_rate(p, pdot) @ point
+    return rdot + qt.matvec(qt.rotation_matrix_rate(p, pdot), point)
 
 
-def _rotation_rate(p, pdot):
-    """dA/dt (3, 3) along pdot: A is quadratic in p, so its derivative is bilinear."""
-    e0, e = p[0], p[1:]
-    d0, d = pdot[0], pdot[1:]
-    return 2.0 * (
-        2.0 * e0 * d0 * jnp.eye(3)
-        + jnp.outer(d, e)
-        + jnp.outer(e, d)
-        + d0 * qt.skew(e)
-        + e0 * qt.skew(d)
+class Jet(NamedTuple):
+    """Quantities x(q_i, q_j) of a pair of bodies with their derivatives along qdot.
+
+    value x (..., d); jac dx/d(q_i, q_j) (..., d, 14); rate xdot = jac qdot (..., d);
+    bias = (jac qdot)_q qdot (..., d), the part of xddot without qddot (gamma = -bias).
+    All analytic: A(p) is quadratic in p.
+    """
+
+    value: Array
+    jac: Array
+    rate: Array
+    bias: Array
+
+
+# Rows of the pair kinematics: the element's point and axes on body i, on body j, and
+# the separation d = r_Pj - r_Pi.
+P_I, X_I, Y_I, Z_I, P_J, X_J, Y_J, Z_J, D = range(9)
+_ROW_IS_POINT = np.array([1.0, 0.0, 0.0, 0.0])[:, None]  # (4, 1)
+_IS_POINT = _ROW_IS_POINT[:, :, None] * np.eye(3)  # (4, 3, 3): d(row)/dr
+
+
+def _side_kinematics(q, qdot, point, axes):
+    """Value (4, 3), d/dq_i (4, 3, 7), rate, bias of (point, axes) of one body."""
+    p, pdot = q[3:], qdot[3:]
+    m_p = qt.rotation_tensor(p)
+    m_pdot = qt.rotation_tensor(pdot)
+    a = qt.matvec(m_p, p) - jnp.eye(3)
+    f = jnp.concatenate([point[None], axes], axis=0)  # (4, 3) body frame
+    origin = jnp.asarray(_ROW_IS_POINT)
+    value = qt.matvec(a, f) + origin * q[:3]
+    rate = qt.matvec(2.0 * qt.matvec(m_p, pdot), f) + origin * qdot[:3]
+    bias = qt.matvec(2.0 * qt.matvec(m_pdot, pdot), f)
+    jac_p = 2.0 * jnp.sum(m_p * f[:, None, :, None], axis=2)  # (4, 3, 4)
+    jac = jnp.concatenate([jnp.asarray(_IS_POINT), jac_p], axis=2)
+    return value, jac, rate, bias
+
+
+def pair_kinematics(qi, qj, vi, vj, point_i, axes_i, point_j, axes_j) -> Jet:
+    """Jets (9, 3) of the rows P_I, X_I, Y_I, Z_I, P_J, X_J, Y_J, Z_J, D (global).
+
+    Arguments:
+        qi, qj, vi, vj: (7,) coordinates and velocities of bodies i and j.
+        point_i, point_j: (3,) [m] body-frame points; axes_i, axes_j: (3, 3) body-frame
+            axis vectors as rows (e.g. frame.T).
+    """
+    vi_, ji, ri, bi = _side_kinematics(qi, vi, point_i, axes_i)
+    vj_, jj, rj, bj = _side_kinematics(qj, vj, point_j, axes_j)
+    zeros = jnp.zeros_like(ji)
+    jac = jnp.concatenate(
+        [jnp.concatenate([ji, zeros], axis=2), jnp.concatenate([zeros, jj], axis=2)],
+        axis=0,
+    )
+    value = jnp.concatenate([vi_, vj_], axis=0)
+    rate = jnp.concatenate([ri, rj], axis=0)
+    bias = jnp.concatenate([bi, bj], axis=0)
+
+    def with_d(x):
+        return jnp.concatenate([x, (x[P_J] - x[P_I])[None]], axis=0)
+
+    return Jet(with_d(value), with_d(jac), with_d(rate), with_d(bias))
+
+
+def pair_dots(k: Jet, pairs) -> Jet:
+    """Jets (m,) of the dot products of the static row pairs ((a, b), ...) of k."""
+    # Constant one-hot selections (m, 9) instead of gathers: cheaper to compile.
+    sel_a = np.eye(9)[[a for a, _ in pairs]]
+    sel_b = np.eye(9)[[b for _, b in pairs]]
+
+    def pick(sel, x):
+        s = jnp.asarray(sel).reshape(sel.shape + (1,) * (x.ndim - 1))
+        return jnp.sum(s * x[None], axis=1)
+
+    a, b = Jet(*(pick(sel_a, x) for x in k)), Jet(*(pick(sel_b, x) for x in k))
+    return Jet(
+        qt.dot(a.value, b.value),
+        jnp.sum(a.jac * b.value[..., None] + b.jac * a.value[..., None], axis=1),
+        qt.dot(a.rate, b.value) + qt.dot(a.value, b.rate),
+        qt.dot(a.bias, b.value) + 2.0 * qt.dot(a.rate, b.rate)
+        + qt.dot(a.value, b.bias),
     )

@@ -34,27 +34,28 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import quaternion as qt
-from .bodies import point_position
-from .joints import ground_extended
+from .bodies import D, X_I, X_J, Y_I, Y_J, Z_I, Z_J, Jet, pair_dots, pair_kinematics
+from .joints import body_selector, ground_extended, place_bodies, select_bodies
 
 
 def _tangent(p, g_p):
     """Remove the component of g_p along p (it does no work while |p| = 1)."""
-    return g_p - p * (p @ g_p) / (p @ p)
+    return g_p - p * qt.dot(p, g_p) / qt.dot(p, p)
 
 
 def point_force(p, point, force) -> Float[Array, " 7"]:
     """Generalized force (7,) of a global force [N] at body point `point` [m] (body
     frame) of a body with Euler parameters p: (f, 2 G^T (s' x A^T f))."""
     a = qt.rotation_matrix(p)
-    n_body = jnp.cross(point, a.T @ force)
-    return jnp.concatenate([force, 2.0 * qt.g_matrix(p).T @ n_body])
+    n_body = jnp.cross(point, qt.matvec(a.T, force))
+    return jnp.concatenate([force, 2.0 * qt.matvec(qt.g_matrix(p).T, n_body)])
 
 
 def body_torque(p, torque) -> Float[Array, " 7"]:
     """Generalized force (7,) of a global torque [N m] on a body: (0, 2 G^T A^T n)."""
-    n_body = qt.rotation_matrix(p).T @ torque
-    return jnp.concatenate([jnp.zeros(3), 2.0 * qt.g_matrix(p).T @ n_body])
+    n_body = qt.matvec(qt.rotation_matrix(p).T, torque)
+    g_p = 2.0 * qt.matvec(qt.g_matrix(p).T, n_body)
+    return jnp.concatenate([jnp.zeros(3), g_p])
 
 
 def centre_loads(q, forces, torques) -> Float[Array, " 7n"]:
@@ -72,7 +73,7 @@ def gravity_forces(mass, gravity, n) -> Float[Array, " 7n"]:
     return jnp.concatenate([f, jnp.zeros((n, 4))], axis=1).reshape(-1)
 
 
-# ---- build-time descriptions ----------------------------------------------------------
+# ---- build-time descriptions --------------------------------------------------
 
 
 @dataclasses.dataclass(frozen=True)
@@ -173,21 +174,22 @@ class BumpStopParams(eqx.Module):
     damping: Float[Array, " k"]
 
 
-# ---- one element: deformation coordinates, law, potential -------------------------------
+# ---- one element: deformation coordinates, law, potential ---------------------
 
 
-def _points(qi, qj, e):
-    return (
-        point_position(qi[:3], qi[3:], e.point_i),
-        point_position(qj[:3], qj[3:], e.point_j),
-    )
+def _kinematics(qi, qj, vi, vj, e, axes_i, axes_j):
+    return pair_kinematics(qi, qj, vi, vj, e.point_i, axes_i, e.point_j, axes_j)
 
 
-def _spring_coords(qi, qj, e):
-    pi, pj = _points(qi, qj, e)
-    d2 = jnp.sum((pj - pi) ** 2)
-    safe = jnp.where(d2 > 0.0, d2, 1.0)
-    return jnp.where(d2 > 0.0, jnp.sqrt(safe), 0.0)[None]
+def _spring_coords(qi, qj, vi, vj, e):
+    eye = jnp.eye(3)
+    d2 = pair_dots(_kinematics(qi, qj, vi, vj, e, eye, eye), ((D, D),))
+    pos = d2.value > 0.0
+    length = jnp.sqrt(jnp.where(pos, d2.value, 1.0))
+    # dL = d(d2) / (2 L); at zero length the direction is undefined: no force.
+    inv = jnp.where(pos, 0.5 / length, 0.0)
+    return Jet(jnp.where(pos, length, 0.0), d2.jac * inv[:, None], d2.rate * inv,
+               jnp.zeros(1))
 
 
 def _spring_law(s, sdot, e):
@@ -198,11 +200,25 @@ def _spring_potential(s, e):
     return 0.5 * e.stiffness * jnp.sum((s - e.free_length) ** 2)
 
 
-def _bushing_coords(qi, qj, e):
-    pi, pj = _points(qi, qj, e)
-    bi = qt.rotation_matrix(qi[3:]) @ e.frame_i
-    bj = qt.rotation_matrix(qj[3:]) @ e.frame_j
-    return jnp.concatenate([bi.T @ (pj - pi), qt.vee(bi.T @ bj)])
+# u = (D . X_I, D . Y_I, D . Z_I); theta = vee(skew part of B_i^T B_j) with
+# (B_i^T B_j)_ab = (axis a of i) . (axis b of j): theta = (plus - minus) / 2.
+_BUSHING_PAIRS = (
+    (D, X_I), (D, Y_I), (D, Z_I),
+    (Z_I, Y_J), (X_I, Z_J), (Y_I, X_J),  # plus
+    (Y_I, Z_J), (Z_I, X_J), (X_I, Y_J),  # minus
+)
+_BUSHING_COMBINE = np.zeros((6, 9))
+_BUSHING_COMBINE[:3, :3] = np.eye(3)
+_BUSHING_COMBINE[3:, 3:6] = 0.5 * np.eye(3)
+_BUSHING_COMBINE[3:, 6:] = -0.5 * np.eye(3)
+
+
+def _bushing_coords(qi, qj, vi, vj, e):
+    k = _kinematics(qi, qj, vi, vj, e, e.frame_i.T, e.frame_j.T)
+    dots = pair_dots(k, _BUSHING_PAIRS)
+    c = jnp.asarray(_BUSHING_COMBINE)
+    return Jet(qt.matvec(c, dots.value), qt.matmul(c, dots.jac),
+               qt.matvec(c, dots.rate), qt.matvec(c, dots.bias))
 
 
 def _bushing_law(s, sdot, e):
@@ -213,10 +229,10 @@ def _bushing_potential(s, e):
     return jnp.sum(0.5 * e.stiffness * s**2 + e.preload * s)
 
 
-def _bump_coords(qi, qj, e):
-    pi, pj = _points(qi, qj, e)
-    axis = qt.rotation_matrix(qi[3:]) @ e.axis_i
-    return (axis @ (pj - pi) / jnp.linalg.norm(e.axis_i))[None]
+def _bump_coords(qi, qj, vi, vj, e):
+    axis = e.axis_i / jnp.sqrt(qt.dot(e.axis_i, e.axis_i))
+    axes = jnp.broadcast_to(axis, (3, 3))
+    return pair_dots(_kinematics(qi, qj, vi, vj, e, axes, jnp.eye(3)), ((D, X_I),))
 
 
 def _bump_law(s, sdot, e):
@@ -239,18 +255,18 @@ FORCE_KINDS = {
 
 def element_deformation(kind: str, qi, qj, e) -> Array:
     """Deformation coordinates s of one element of `kind` (see module docstring)."""
-    return FORCE_KINDS[kind][0](qi, qj, e)
+    zero = jnp.zeros_like(qi)
+    return FORCE_KINDS[kind][0](qi, qj, zero, zero, e).value
 
 
 def _one_element(kind, qi, qj, vi, vj, e):
     coords, law, _ = FORCE_KINDS[kind]
-    s = coords(qi, qj, e)
-    jac_i, jac_j = jax.jacfwd(coords, argnums=(0, 1))(qi, qj, e)
-    sdot = jac_i @ vi + jac_j @ vj
-    f = law(s, sdot, e)
-    gi, gj = -jac_i.T @ f, -jac_j.T @ f
-    gi = gi.at[3:].set(_tangent(qi[3:], gi[3:]))
-    gj = gj.at[3:].set(_tangent(qj[3:], gj[3:]))
+    s = coords(qi, qj, vi, vj, e)
+    f = law(s.value, s.rate, e)
+    g = -qt.matvec(s.jac.T, f)
+    gi, gj = g[:7], g[7:]
+    gi = jnp.concatenate([gi[:3], _tangent(qi[3:], gi[3:])])
+    gj = jnp.concatenate([gj[:3], _tangent(qj[3:], gj[3:])])
     return gi, gj
 
 
@@ -261,15 +277,14 @@ def element_forces(kind: str, body_i, body_j, e, q, qdot) -> Float[Array, " 7n"]
     with leading axis k; q, qdot (7 n,).
     """
     n = q.shape[0] // 7
-    bi = np.asarray(body_i, dtype=np.int64)
-    bj = np.asarray(body_j, dtype=np.int64)
+    sel_i, sel_j = body_selector(body_i, n), body_selector(body_j, n)
     q_ext = ground_extended(q.reshape(n, 7))
     v_ext = jnp.concatenate([qdot.reshape(n, 7), jnp.zeros((1, 7))], axis=0)
     gi, gj = jax.vmap(lambda a, b, c, d, p: _one_element(kind, a, b, c, d, p))(
-        q_ext[bi], q_ext[bj], v_ext[bi], v_ext[bj], e
+        select_bodies(sel_i, q_ext), select_bodies(sel_j, q_ext),
+        select_bodies(sel_i, v_ext), select_bodies(sel_j, v_ext), e,
     )
-    g = jnp.zeros((n + 1, 7), dtype=q.dtype)
-    g = g.at[np.where(bi < 0, n, bi)].add(gi).at[np.where(bj < 0, n, bj)].add(gj)
+    g = jnp.sum(place_bodies(sel_i, gi) + place_bodies(sel_j, gj), axis=0)
     return g[:n].reshape(-1)
 
 
@@ -278,7 +293,9 @@ def element_potential(kind: str, body_i, body_j, e, q) -> Float[Array, ""]:
     n = q.shape[0] // 7
     coords, _, potential = FORCE_KINDS[kind]
     q_ext = ground_extended(q.reshape(n, 7))
-    bi = np.asarray(body_i, dtype=np.int64)
-    bj = np.asarray(body_j, dtype=np.int64)
-    v = jax.vmap(lambda a, b, p: potential(coords(a, b, p), p))(q_ext[bi], q_ext[bj], e)
+    zero = jnp.zeros(7)
+    v = jax.vmap(lambda a, b, p: potential(coords(a, b, zero, zero, p).value, p))(
+        select_bodies(body_selector(body_i, n), q_ext),
+        select_bodies(body_selector(body_j, n), q_ext), e,
+    )
     return jnp.sum(v)

@@ -12,11 +12,13 @@ j). The joint axis of revolute and prismatic joints is z.
     prismatic (5):  z_i . x_j = z_i . y_j = x_i . y_j = 0, and d . x_i = d . y_i = 0
                     with d = r_Pj - r_Pi (slides along z_i, no relative rotation)
 
-Phi of one joint is written for one joint, and differentiated by JAX on the 14
-coordinates (q_i, q_j) it touches: Phi_q exactly, and gamma = -(Phi_q qdot)_q qdot as
-the second directional derivative of Phi along qdot. The same functions are vmapped over
-all joints of one kind and scattered into the global matrices with static indices.
-The normalisation constraints p_i^T p_i - 1 = 0 (one per body) come first in Phi.
+Each equation is built from body points and body axes and their dot products as a
+`Jet` (bodies.pair_kinematics): value, Jacobian over the 14 coordinates (q_i, q_j),
+rate, and the bias (Phi_q qdot)_q qdot, all analytic (A(p) is quadratic in p), so
+gamma = -bias. (Tests check them against jax.jacfwd and finite differences.) One joint
+is written once, vmapped over all joints of a kind and placed into the global matrices
+with constant one-hot products. The normalisation constraints p_i^T p_i - 1 = 0 (one
+per body) come first in Phi.
 """
 
 import dataclasses
@@ -28,8 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from .bodies import point_position
-from .quaternion import rotation_matrix
+from .bodies import D, X_I, X_J, Y_I, Y_J, Z_I, Jet, pair_dots, pair_kinematics
 
 GROUND = -1
 _GROUND_Q = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
@@ -142,77 +143,63 @@ class JointParams(eqx.Module):
     frame_j: Float[Array, "k 3 3"]
 
 
-def _sides(qi, qj, jp):
-    """Joint points (global) and joint frames (global columns) of both sides."""
-    ai = rotation_matrix(qi[3:])
-    aj = rotation_matrix(qj[3:])
-    pi = point_position(qi[:3], qi[3:], jp.point_i)
-    pj = point_position(qj[:3], qj[3:], jp.point_j)
-    return pi, pj, ai @ jp.frame_i, aj @ jp.frame_j
-
-
-def _phi_spherical(qi, qj, jp):
-    pi, pj, _, _ = _sides(qi, qj, jp)
-    return pi - pj
-
-
-def _phi_revolute(qi, qj, jp):
-    pi, pj, fi, fj = _sides(qi, qj, jp)
-    zi = fi[:, 2]
-    return jnp.concatenate([pi - pj, jnp.stack([zi @ fj[:, 0], zi @ fj[:, 1]])])
-
-
-def _phi_fixed(qi, qj, jp):
-    pi, pj, fi, fj = _sides(qi, qj, jp)
-    zi = fi[:, 2]
-    dots = jnp.stack([zi @ fj[:, 0], zi @ fj[:, 1], fi[:, 0] @ fj[:, 1]])
-    return jnp.concatenate([pi - pj, dots])
-
-
-def _phi_prismatic(qi, qj, jp):
-    pi, pj, fi, fj = _sides(qi, qj, jp)
-    zi = fi[:, 2]
-    d = pj - pi
-    return jnp.stack(
-        [zi @ fj[:, 0], zi @ fj[:, 1], fi[:, 0] @ fj[:, 1], d @ fi[:, 0], d @ fi[:, 1]]
-    )
-
-
-# kind -> (number of equations, Phi of one joint)
+# kind -> (number of equations, points coincide?, dot products that vanish). Rows of
+# bodies.pair_kinematics: X_I etc. are the joint axes, D = r_Pj - r_Pi.
+_PARALLEL = ((Z_I, X_J), (Z_I, Y_J))
 JOINT_KINDS = {
-    "spherical": (3, _phi_spherical),
-    "revolute": (5, _phi_revolute),
-    "fixed": (6, _phi_fixed),
-    "prismatic": (5, _phi_prismatic),
+    "spherical": (3, True, ()),
+    "revolute": (5, True, _PARALLEL),
+    "fixed": (6, True, _PARALLEL + ((X_I, Y_J),)),
+    "prismatic": (5, False, _PARALLEL + ((X_I, Y_J), (D, X_I), (D, Y_I))),
 }
 
 
+def joint_jet(kind: str, qi, qj, vi, vj, jp) -> Jet:
+    """Phi (neq,), Phi_q (neq, 14) over (q_i, q_j), Phidot and bias = -gamma of one
+    joint of `kind` (unbatched JointParams) at q_i, q_j (7,) moving at v_i, v_j (7,).
+    """
+    _, coincide, pairs = JOINT_KINDS[kind]
+    k = pair_kinematics(qi, qj, vi, vj, jp.point_i, jp.frame_i.T, jp.point_j,
+                        jp.frame_j.T)
+    parts = []
+    if coincide:  # r_Pi - r_Pj = -D
+        parts.append(Jet(*(-x[D] for x in k)))
+    if pairs:
+        parts.append(pair_dots(k, pairs))
+    return Jet(*(jnp.concatenate(xs, axis=0) for xs in zip(*parts)))
+
+
 def joint_phi(kind: str, qi, qj, jp) -> Array:
-    """Phi (neq,) of one joint of `kind` from q_i (7,), q_j (7,) and its JointParams
-    (unbatched)."""
-    return JOINT_KINDS[kind][1](qi, qj, jp)
-
-
-def _one_joint(kind, qi, qj, vi, vj, jp):
-    """Phi, dPhi/dq_i, dPhi/dq_j, Phidot and gamma of one joint."""
-    phi_fn = JOINT_KINDS[kind][1]
-    phi = phi_fn(qi, qj, jp)
-    jac_i, jac_j = jax.jacfwd(phi_fn, argnums=(0, 1))(qi, qj, jp)
-
-    def along(s):  # Phi on the straight line q + s qdot
-        return phi_fn(qi + s * vi, qj + s * vj, jp)
-
-    def rate(s):
-        return jax.jvp(along, (s,), (jnp.ones_like(s),))[1]
-
-    zero = jnp.zeros((), dtype=qi.dtype)
-    phidot, second = jax.jvp(rate, (zero,), (jnp.ones_like(zero),))
-    return phi, jac_i, jac_j, phidot, -second
+    """Phi (neq,) of one joint of `kind` from q_i (7,), q_j (7,) (unbatched params)."""
+    zero = jnp.zeros_like(qi)
+    return joint_jet(kind, qi, qj, zero, zero, jp).value
 
 
 def ground_extended(x):
     """Append the ground's coordinates (origin, identity) as row n of x (n, 7)."""
     return jnp.concatenate([x, jnp.asarray(_GROUND_Q, dtype=x.dtype)[None]], axis=0)
+
+
+def body_selector(body, n: int) -> Array:
+    """One-hot (k, n + 1) of static body indices (-1, the ground, is column n).
+
+    Selecting and scattering with constant one-hot products instead of gathers and
+    scatters keeps the compiled graph small (and the same for forward and reverse AD).
+    """
+    b = np.asarray(body, dtype=np.int64)
+    return jnp.asarray(np.eye(n + 1)[np.where(b < 0, n, b)])
+
+
+def select_bodies(selector, x_ext) -> Array:
+    """Rows (k, 7) of x_ext (n + 1, 7) picked by a body_selector (k, n + 1)."""
+    return jnp.sum(selector[:, :, None] * x_ext[None], axis=1)
+
+
+def place_bodies(selector, blocks) -> Array:
+    """(k, ..., n + 1, 7): blocks (k, ..., 7) put in the column block of each body."""
+    s = selector.reshape(selector.shape[:1] + (1,) * (blocks.ndim - 2)
+                         + selector.shape[1:] + (1,))
+    return s * blocks[..., None, :]
 
 
 def joint_terms(kind: str, body_i, body_j, jp: JointParams, q, qdot):
@@ -226,23 +213,19 @@ def joint_terms(kind: str, body_i, body_j, jp: JointParams, q, qdot):
 
     Returns (phi (k neq,), phi_q (k neq, 7 n), phidot (k neq,), gamma (k neq,)).
     """
-    neq = JOINT_KINDS[kind][0]
     n = q.shape[0] // 7
-    bi = np.asarray(body_i, dtype=np.int64)
-    bj = np.asarray(body_j, dtype=np.int64)
-    k = bi.shape[0]
+    sel_i, sel_j = body_selector(body_i, n), body_selector(body_j, n)
     q_ext = ground_extended(q.reshape(n, 7))
     v_ext = jnp.concatenate([qdot.reshape(n, 7), jnp.zeros((1, 7))], axis=0)
-    # Index -1 picks the appended ground row.
-    phi, jac_i, jac_j, phidot, gamma = jax.vmap(
-        lambda qi, qj, vi, vj, p: _one_joint(kind, qi, qj, vi, vj, p)
-    )(q_ext[bi], q_ext[bj], v_ext[bi], v_ext[bj], jp)
-    rows = np.arange(k * neq).reshape(k, neq, 1)
-    cols_i = (7 * np.where(bi < 0, n, bi))[:, None, None] + np.arange(7)
-    cols_j = (7 * np.where(bj < 0, n, bj))[:, None, None] + np.arange(7)
-    phi_q = jnp.zeros((k * neq, 7 * (n + 1)), dtype=q.dtype)
-    phi_q = phi_q.at[rows, cols_i].add(jac_i).at[rows, cols_j].add(jac_j)
-    return phi.reshape(-1), phi_q[:, : 7 * n], phidot.reshape(-1), gamma.reshape(-1)
+    jet = jax.vmap(lambda qi, qj, vi, vj, p: joint_jet(kind, qi, qj, vi, vj, p))(
+        select_bodies(sel_i, q_ext), select_bodies(sel_j, q_ext),
+        select_bodies(sel_i, v_ext), select_bodies(sel_j, v_ext), jp,
+    )
+    phi_q = (place_bodies(sel_i, jet.jac[..., :7])
+             + place_bodies(sel_j, jet.jac[..., 7:]))
+    k, neq = jet.value.shape
+    phi_q = phi_q[:, :, :n, :].reshape(k * neq, 7 * n)  # the ground's columns dropped
+    return (jet.value.reshape(-1), phi_q, jet.rate.reshape(-1), -jet.bias.reshape(-1))
 
 
 def normalization_terms(q, qdot):
@@ -251,9 +234,8 @@ def normalization_terms(q, qdot):
     p = q.reshape(n, 7)[:, 3:]
     pdot = qdot.reshape(n, 7)[:, 3:]
     phi = jnp.sum(p * p, axis=1) - 1.0
-    rows = np.arange(n)[:, None]
-    cols = 7 * np.arange(n)[:, None] + 3 + np.arange(4)
-    phi_q = jnp.zeros((n, 7 * n), dtype=q.dtype).at[rows, cols].set(2.0 * p)
+    row = jnp.concatenate([jnp.zeros((n, 3), dtype=q.dtype), 2.0 * p], axis=1)
+    phi_q = (jnp.eye(n)[:, :, None] * row[:, None, :]).reshape(n, 7 * n)
     phidot = 2.0 * jnp.sum(p * pdot, axis=1)
     gamma = -2.0 * jnp.sum(pdot * pdot, axis=1)
     return phi, phi_q, phidot, gamma

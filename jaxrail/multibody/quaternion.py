@@ -14,6 +14,7 @@ All functions take and return float64 arrays and work under jit, vmap and grad.
 """
 
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 
@@ -21,41 +22,100 @@ def _f64(x):
     return jnp.asarray(x, dtype=jnp.float64)
 
 
+# Small-array products written as broadcast-multiply-and-sum: XLA on CPU compiles a
+# tiny dot_general roughly ten times slower than the equivalent elementwise ops, and a
+# multibody right-hand side has hundreds of them.
+def dot(a, b):
+    """Sum over the last axis of a * b (vector dot product, broadcasting)."""
+    return jnp.sum(a * b, axis=-1)
+
+
+def matvec(a, x):
+    """a (..., m, k) times x (..., k) -> (..., m)."""
+    return jnp.sum(a * x[..., None, :], axis=-1)
+
+
+def matmul(a, b):
+    """a (..., m, k) times b (..., k, l) -> (..., m, l)."""
+    return jnp.sum(a[..., :, :, None] * b[..., None, :, :], axis=-2)
+
+
+# Constant tensors: skew, G, E and A are (bi)linear maps of their arguments, and
+# contracting with a constant tensor keeps the traced graph (and compile time) small.
+_LEVI = np.zeros((3, 3, 3))
+for _i, _j, _k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+    _LEVI[_i, _j, _k], _LEVI[_i, _k, _j] = 1.0, -1.0
+
+
+def _skew_np(v):
+    return -np.einsum("ijk,k->ij", _LEVI, v)
+
+
+def _g_np(p):
+    return np.concatenate([-p[1:, None], -_skew_np(p[1:]) + p[0] * np.eye(3)], axis=1)
+
+
+def _e_np(p):
+    return np.concatenate([-p[1:, None], _skew_np(p[1:]) + p[0] * np.eye(3)], axis=1)
+
+
+def _quadratic_a_np(p, r):
+    """Symmetric bilinear form with A(p) = Q(p, p) - I: Q(p, p) = 2 e0^2 I + 2 e e^T
+    + 2 e0 e~."""
+    e0, e, f0, f = p[0], p[1:], r[0], r[1:]
+    return (2.0 * e0 * f0 * np.eye(3) + np.outer(e, f) + np.outer(f, e)
+            + e0 * _skew_np(f) + f0 * _skew_np(e))
+
+
+_BASIS = np.eye(4)
+_G_TENSOR = np.stack([_g_np(b) for b in _BASIS], axis=-1)  # (3, 4, 4)
+_E_TENSOR = np.stack([_e_np(b) for b in _BASIS], axis=-1)  # (3, 4, 4)
+_A_TENSOR = np.stack(  # (3, 3, 4, 4)
+    [np.stack([_quadratic_a_np(b, c) for c in _BASIS], axis=-1) for b in _BASIS],
+    axis=-2,
+)
+
+
 def skew(v: Float[ArrayLike, "3"]) -> Float[Array, "3 3"]:
     """The cross-product matrix v~, with v~ w = v x w."""
-    v = _f64(v)
-    z = jnp.zeros((), dtype=v.dtype)
-    return jnp.array(
-        [[z, -v[2], v[1]], [v[2], z, -v[0]], [-v[1], v[0], z]], dtype=v.dtype
-    )
+    return -matvec(jnp.asarray(_LEVI), _f64(v))
 
 
 def vee(m: Float[ArrayLike, "3 3"]) -> Float[Array, "3"]:
     """Inverse of `skew` applied to the skew-symmetric part of m."""
-    m = _f64(m)
-    return 0.5 * jnp.array([m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1]])
+    return -0.5 * jnp.sum(jnp.asarray(_LEVI) * _f64(m)[:, :, None], axis=(0, 1))
 
 
 def rotation_matrix(p: Float[ArrayLike, "4"]) -> Float[Array, "3 3"]:
     """A(p): body-to-global rotation matrix (3, 3); orthogonal only if |p| = 1."""
     p = _f64(p)
-    e0, e = p[0], p[1:]
-    eye = jnp.eye(3, dtype=p.dtype)
-    return (2.0 * e0**2 - 1.0) * eye + 2.0 * (jnp.outer(e, e) + e0 * skew(e))
+    return matvec(matvec(jnp.asarray(_A_TENSOR), p), p) - jnp.eye(3)
+
+
+def rotation_matrix_rate(
+    p: Float[ArrayLike, "4"], pdot: Float[ArrayLike, "4"]
+) -> Float[Array, "3 3"]:
+    """dA/dt (3, 3) = 2 Q(p, pdot): the exact derivative of A(p) along pdot."""
+    return 2.0 * matvec(matvec(jnp.asarray(_A_TENSOR), _f64(pdot)), _f64(p))
+
+
+def rotation_tensor(p: Float[ArrayLike, "4"]) -> Float[Array, "3 3 4"]:
+    """M(p) (3, 3, 4), linear in p, with A(p) = M(p) p - I and dA/dp = 2 M(p).
+
+    Hence dA/dt = 2 M(p) pdot, and the second derivative of A along pdot (with
+    pddot = 0) is 2 M(pdot) pdot: everything the joint and force kinematics need.
+    """
+    return matvec(jnp.asarray(_A_TENSOR), _f64(p))
 
 
 def g_matrix(p: Float[ArrayLike, "4"]) -> Float[Array, "3 4"]:
     """Nikravesh's G(p) (3, 4): omega' = 2 G pdot (body frame)."""
-    p = _f64(p)
-    e0, e = p[0], p[1:]
-    return jnp.concatenate([-e[:, None], -skew(e) + e0 * jnp.eye(3)], axis=1)
+    return matvec(jnp.asarray(_G_TENSOR), _f64(p))
 
 
 def e_matrix(p: Float[ArrayLike, "4"]) -> Float[Array, "3 4"]:
     """Nikravesh's E(p) (3, 4): omega = 2 E pdot (global frame)."""
-    p = _f64(p)
-    e0, e = p[0], p[1:]
-    return jnp.concatenate([-e[:, None], skew(e) + e0 * jnp.eye(3)], axis=1)
+    return matvec(jnp.asarray(_E_TENSOR), _f64(p))
 
 
 def normalize(p: Float[ArrayLike, "4"]) -> Float[Array, "4"]:
@@ -126,7 +186,7 @@ def multiply(p: Float[ArrayLike, "4"], r: Float[ArrayLike, "4"]) -> Float[Array,
     p0, pv = p[0], p[1:]
     r0, rv = r[0], r[1:]
     return jnp.concatenate(
-        [(p0 * r0 - pv @ rv)[None], p0 * rv + r0 * pv + jnp.cross(pv, rv)]
+        [(p0 * r0 - dot(pv, rv))[None], p0 * rv + r0 * pv + jnp.cross(pv, rv)]
     )
 
 
@@ -134,11 +194,11 @@ def pdot_from_omega_global(
     p: Float[ArrayLike, "4"], omega: Float[ArrayLike, "3"]
 ) -> Float[Array, "4"]:
     """pdot [1/s] (4,) of a unit p rotating at omega [rad/s] in the global frame."""
-    return 0.5 * e_matrix(p).T @ _f64(omega)
+    return 0.5 * matvec(e_matrix(p).T, _f64(omega))
 
 
 def pdot_from_omega_body(
     p: Float[ArrayLike, "4"], omega_body: Float[ArrayLike, "3"]
 ) -> Float[Array, "4"]:
     """pdot [1/s] (4,) of a unit p rotating at omega' [rad/s] in the body frame."""
-    return 0.5 * g_matrix(p).T @ _f64(omega_body)
+    return 0.5 * matvec(g_matrix(p).T, _f64(omega_body))

@@ -66,7 +66,8 @@ class System(eqx.Module):
         """("body", "", i) or ("joint" | "force", kind, index within its kind)."""
         if name in self.body_names:
             return "body", "", self.body_names.index(name)
-        for what, groups in (("joint", self.joint_groups), ("force", self.force_groups)):
+        kinds = (("joint", self.joint_groups), ("force", self.force_groups))
+        for what, groups in kinds:
             for g in groups:
                 if name in g.names:
                     return what, g.kind, g.names.index(name)
@@ -217,7 +218,7 @@ def build_system(bodies, joints=(), forces=(), gravity=(0.0, 0.0, 0.0),
     return system, params
 
 
-# ---- assembly ---------------------------------------------------------------------------
+# ---- assembly -----------------------------------------------------------------
 
 
 def mass_matrix(system: System, params: SystemParams, q) -> Float[Array, "7n 7n"]:
@@ -225,14 +226,16 @@ def mass_matrix(system: System, params: SystemParams, q) -> Float[Array, "7n 7n"
     _, p = bd.split_coordinates(q)
     blocks = jax.vmap(bd.body_mass_matrix)(params.bodies.mass, params.bodies.inertia, p)
     n = system.n_bodies
-    return jnp.einsum("ij,iab->iajb", jnp.eye(n), blocks).reshape(7 * n, 7 * n)
+    placed = jnp.eye(n)[:, None, :, None] * blocks[:, :, None, :]  # (n, 7, n, 7)
+    return placed.reshape(7 * n, 7 * n)
 
 
 def quadratic_velocity(system: System, params: SystemParams, q, qdot) -> Array:
     """h (7 n,), the quadratic velocity vector 8 Gdot^T J' Gdot p of each body."""
     _, p = bd.split_coordinates(q)
     _, pdot = bd.split_coordinates(qdot)
-    return jax.vmap(bd.body_quadratic_velocity)(params.bodies.inertia, p, pdot).reshape(-1)
+    h = jax.vmap(bd.body_quadratic_velocity)(params.bodies.inertia, p, pdot)
+    return h.reshape(-1)
 
 
 def constraints(system: System, params: SystemParams, q, qdot):
@@ -261,14 +264,26 @@ def generalized_forces(system: System, params: SystemParams, t, q, qdot,
                                   params.forces[grp.kind], q, qdot)
     if external is not None:
         forces, torques = external(t, q, qdot)
+        n = system.n_bodies
+        if jnp.shape(forces) != (n, 3) or jnp.shape(torques) != (n, 3):
+            raise ValueError(f"external must return forces and torques of shape ({n}, 3)"
+                             f", got {jnp.shape(forces)} and {jnp.shape(torques)}")
         g = g + fc.centre_loads(q, forces, torques)
     return g
+
+
+def _check_state(system, q, qdot):
+    shape = (7 * system.n_bodies,)
+    for name, x in (("q", q), ("qdot", qdot)):
+        if x.shape != shape:
+            raise ValueError(f"{name} must have shape {shape} (7 per body), got {x.shape}")
 
 
 def accelerations(system: System, params: SystemParams, t, q, qdot, external=None):
     """(qddot (7 n,), lambda (m,)) from eq. (19) with Baumgarte stabilisation."""
     q = jnp.asarray(q, dtype=jnp.float64)
     qdot = jnp.asarray(qdot, dtype=jnp.float64)
+    _check_state(system, q, qdot)
     mass = mass_matrix(system, params, q)
     phi, phi_q, phidot, gamma = constraints(system, params, q, qdot)
     rhs_top = generalized_forces(system, params, t, q, qdot, external)
@@ -293,12 +308,14 @@ def rhs(t, y, args):
 # ---- diagnostics --------------------------------------------------------------------
 
 
+@eqx.filter_jit
 def constraint_violation(system: System, params: SystemParams, q, qdot):
     """(max |Phi|, max |Phidot|) over all constraint rows (m or -, m/s or 1/s)."""
     phi, _, phidot, _ = constraints(system, params, q, qdot)
     return jnp.max(jnp.abs(phi)), jnp.max(jnp.abs(phidot))
 
 
+@eqx.filter_jit
 def kinetic_energy(system: System, params: SystemParams, q, qdot) -> Array:
     """Total kinetic energy [J]."""
     _, p = bd.split_coordinates(q)
@@ -307,6 +324,7 @@ def kinetic_energy(system: System, params: SystemParams, q, qdot) -> Array:
     return jnp.sum(jax.vmap(bd.body_kinetic_energy)(b.mass, b.inertia, p, rdot, pdot))
 
 
+@eqx.filter_jit
 def potential_energy(system: System, params: SystemParams, q) -> Array:
     """Gravity (-m g . r) plus the energy stored in the force elements [J]."""
     r, _ = bd.split_coordinates(q)
@@ -317,6 +335,7 @@ def potential_energy(system: System, params: SystemParams, q) -> Array:
     return v
 
 
+@eqx.filter_jit
 def angular_momentum(system: System, params: SystemParams, q, qdot) -> Array:
     """Total angular momentum (3,) [kg m^2/s] about the global origin, global frame."""
     r, p = bd.split_coordinates(q)
@@ -326,6 +345,7 @@ def angular_momentum(system: System, params: SystemParams, q, qdot) -> Array:
     return jnp.sum(each, axis=0)
 
 
+@eqx.filter_jit
 def consistent_initial_conditions(system: System, params: SystemParams, q0, qdot0,
                                   iterations: int = 12):
     """(q, qdot) with Phi(q) = 0 and Phi_q qdot = 0, nearest to (q0, qdot0).
@@ -349,12 +369,14 @@ def consistent_initial_conditions(system: System, params: SystemParams, q0, qdot
 
 def simulate_system(system: System, params: SystemParams, q0, qdot0, t1, dt0=1e-3,
                     saveat=None, rtol=1e-8, atol=1e-8, solver=None, t0=0.0,
-                    external=None, max_steps=100_000, adjoint=None, throw=True):
+                    external=None, max_steps=100_000, adjoint=None, throw=True,
+                    stepsize_controller=None):
     """Integrate eq. (19) with diffrax from (q0, qdot0) at t0 [s] to t1 [s].
 
     Returns diffrax's Solution, with ys = (q (..., 7 n), qdot (..., 7 n)) at `saveat`
-    (default: t1 only). solver defaults to Tsit5, the step size to a PIDController
-    with rtol, atol; adjoint to RecursiveCheckpointAdjoint (reverse-mode AD works).
+    (default: t1 only). solver defaults to Tsit5; stepsize_controller to a
+    PIDController with rtol, atol (pass diffrax.ConstantStepSize() for fixed steps
+    dt0); adjoint to RecursiveCheckpointAdjoint (reverse-mode AD works).
     """
     y0 = (jnp.asarray(q0, dtype=jnp.float64), jnp.asarray(qdot0, dtype=jnp.float64))
     return diffrax.diffeqsolve(
@@ -366,7 +388,8 @@ def simulate_system(system: System, params: SystemParams, q0, qdot0, t1, dt0=1e-
         y0,
         args=(system, params, external),
         saveat=diffrax.SaveAt(t1=True) if saveat is None else saveat,
-        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol),
+        stepsize_controller=(diffrax.PIDController(rtol=rtol, atol=atol)
+                             if stepsize_controller is None else stepsize_controller),
         max_steps=max_steps,
         adjoint=diffrax.RecursiveCheckpointAdjoint() if adjoint is None else adjoint,
         throw=throw,
