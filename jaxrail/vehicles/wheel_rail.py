@@ -1,0 +1,125 @@
+"""Wheel-rail forces on a wheelset: the contact search, Hertz, a normal law and Polach.
+
+For each patch of each wheel (:func:`jaxrail.contact.search_wheelset`):
+
+1. Hertz stiffness ``K`` from the principal curvatures at the contact point (wheel
+   rolling direction ``curvature_wheel_x``, lateral profile curvatures of wheel and
+   rail; the rail is straight along the track), scaled by ``stiffness_scale``.
+2. Normal force ``N = law.force(K, delta, delta_dot)``; ``delta_dot`` is the rate at
+   which the wheel point moves into the rail along the contact normal.
+3. The Hertz ellipse for ``N`` (``a, b`` grow as ``N^(1/3)``), the creepages of the
+   wheelset's rigid-body motion at the contact point (midway between the wheel point and
+   its foot on the rail), and Polach's creep forces.
+4. The force on the wheelset ``N n + fx t + fy l`` at the contact point, and its moment
+   about the wheelset centre.
+
+Inactive patch slots give exactly zero force with finite gradients. Everything is in
+the global frame and SI units.
+"""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from ..contact.creepage import creepages
+from ..contact.hertz import hertz_from_curvatures
+from ..contact.normal import Eq17, NormalLaw
+from ..contact.polach import PolachParameters, polach
+from ..contact.search import SearchConfig, search_wheelset
+
+
+def _f64(x):
+    return jnp.asarray(x, dtype=jnp.float64)
+
+
+class ContactParameters(eqx.Module):
+    """Physical parameters of the wheel-rail contact (all traced, differentiable).
+
+    Fields:
+        friction: friction coefficient mu [-] (mu0 with the Polach 2005 options).
+        stiffness_scale: factor on the Hertz stiffness [-] (1 = Hertz).
+        shear_modulus: G [Pa]; poisson: nu [-] (wheel and rail of the same steel).
+        normal_law: the normal force law (default the paper's eq. 17 with c_e = 0.8,
+            v0 = 0.01 m/s, see docs/normal-forces.md for why).
+        polach: Polach 2005 options (defaults reduce to Polach 1999).
+    """
+
+    friction: Float[Array, ""] = eqx.field(converter=_f64, default=0.4)
+    stiffness_scale: Float[Array, ""] = eqx.field(converter=_f64, default=1.0)
+    shear_modulus: Float[Array, ""] = eqx.field(converter=_f64, default=8.2e10)
+    poisson: Float[Array, ""] = eqx.field(converter=_f64, default=0.28)
+    normal_law: NormalLaw = eqx.field(default_factory=Eq17)
+    polach: PolachParameters = eqx.field(default_factory=PolachParameters)
+
+
+class PatchForces(eqx.Module):
+    """Per patch (leading shape ``(2, P)``: left/right wheel, patch slot).
+
+    Fields: normal_force [N]; creep_force_x, creep_force_y [N] along the contact
+    frame's longitudinal and lateral axes (on the wheel); creepage_x, creepage_y [-],
+    spin [1/m]; semi_axis_a, semi_axis_b [m]; stiffness [N/m^1.5]; force (..., 3) on
+    the wheel, global [N].
+    """
+
+    normal_force: Array
+    creep_force_x: Array
+    creep_force_y: Array
+    creepage_x: Array
+    creepage_y: Array
+    spin: Array
+    semi_axis_a: Array
+    semi_axis_b: Array
+    stiffness: Array
+    force: Array
+
+
+def _cube_root(x):
+    positive = x > 0.0
+    return jnp.where(positive, jnp.cbrt(jnp.where(positive, x, 1.0)), 0.0)
+
+
+def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_velocity):
+    """Forces of one patch slot (scalars); ``patch`` is a ContactPatches entry."""
+    G, nu = params.shear_modulus, params.poisson
+    radius_x = 1.0 / patch.curvature_wheel_x
+    unit = hertz_from_curvatures(1.0, radius_x, patch.curvature_wheel_y, patch.curvature_rail_y, G, nu)
+    stiffness = params.stiffness_scale * unit.stiffness
+    wheel_point_velocity = velocity + jnp.cross(angular_velocity, patch.wheel_point - centre)
+    rate = -wheel_point_velocity @ patch.normal
+    normal_force = jnp.where(patch.active,
+                             params.normal_law.force(stiffness, patch.penetration, rate), 0.0)
+    growth = _cube_root(normal_force)  # Hertz: a, b grow as N^(1/3)
+    a, b = unit.a * growth, unit.b * growth
+    # Creepages at the middle of the overlap: the deformed interface of two bodies of
+    # the same steel (the rail point would bias xi by -delta/r, the wheel point by +).
+    interface = 0.5 * (patch.wheel_point + patch.rail_point)
+    xi, eta, phi = creepages(velocity, angular_velocity, centre, interface, patch.frame)
+    fx, fy = polach(normal_force, params.friction, a, b, xi, eta, phi, G, nu,
+                    parameters=params.polach, rolling_speed=jnp.abs(velocity @ patch.frame[:, 0]))
+    frame = patch.frame
+    force = normal_force * frame[:, 2] + fx * frame[:, 0] + fy * frame[:, 1]
+    return PatchForces(normal_force, fx, fy, xi, eta, phi, a, b, stiffness, force)
+
+
+def wheelset_contact_loads(wheel, rail, track, rail_offset, params: ContactParameters,
+                           position, rotation, velocity, angular_velocity,
+                           config: SearchConfig = SearchConfig(), s_guess=None):
+    """Total wheel-rail force and moment on a wheelset.
+
+    Arguments:
+        wheel, rail, track, rail_offset: as :func:`jaxrail.contact.search_wheelset`.
+        params: :class:`ContactParameters`.
+        position (3,), rotation (3, 3): wheelset pose (centre and body axes, global).
+        velocity (3,), angular_velocity (3,): of the wheelset, global [m/s, rad/s].
+
+    Returns ``(force (3,), moment (3,), patches, patch_forces)``: the resultant force
+    [N] and its moment about the wheelset centre [N m], both global, with the contact
+    patches and per-patch forces for output.
+    """
+    patches = search_wheelset(wheel, rail, track, rail_offset, position, rotation, config, s_guess)
+    one = lambda patch: _patch_forces(params, patch, position, velocity, angular_velocity)  # noqa: E731
+    forces = jax.vmap(jax.vmap(one))(patches)
+    arms = patches.rail_point - position
+    moment = jnp.sum(jnp.cross(arms, forces.force), axis=(0, 1))
+    return jnp.sum(forces.force, axis=(0, 1)), moment, patches, forces
