@@ -49,21 +49,12 @@ BENCH, BENCH_PARAMS = mb.build_system(
 
 
 @jax.jit
-def simulate_bench(params, q0, qdot0, ts, tol):
-    """(q, qdot) at ts; tol = rtol = atol is traced (one compilation for all runs)."""
+def _simulate_bench(params, q0, qdot0, ts, tol):
     sol = mb.simulate_system(BENCH, params, q0, qdot0, ts[-1], dt0=1e-3,
                              saveat=diffrax.SaveAt(ts=ts), rtol=tol, atol=tol)
-    return sol.ys
+    qs, qds = sol.ys
 
-
-def diagnostics(params, qs, qds):
-    return jax.tree.map(np.asarray, _diagnostics(params, qs, qds))
-
-
-@jax.jit
-def _diagnostics(params, qs, qds):
-    """Per sample: max |Phi|, max |Phidot|, T, T + V, angular momentum, pivot."""
-    def one(q, v):
+    def diagnostics(q, v):
         phi, phidot = mb.constraint_violation(BENCH, params, q, v)
         kinetic = mb.kinetic_energy(BENCH, params, q, v)
         r, a = mb.body_pose(q, 0)
@@ -72,7 +63,16 @@ def _diagnostics(params, qs, qds):
                     momentum=mb.angular_momentum(BENCH, params, q, v),
                     pivot=r + a @ jnp.array([0.0, 0.0, 0.5]),
                     w_free=mb.angular_velocity(q, v, 2)[1])
-    return jax.vmap(one)(qs, qds)
+
+    return qs, qds, jax.vmap(diagnostics)(qs, qds)
+
+
+def simulate_bench(params, q0, qdot0, ts, tol):
+    """(q, qdot, diagnostics) at ts, as NumPy arrays; tol = rtol = atol is traced, so
+    every run shares one compilation. Diagnostics per sample: max |Phi|, max |Phidot|,
+    T, T + V, angular momentum, pivot of the upper link, free body's omega'."""
+    return jax.tree.map(np.asarray, _simulate_bench(params, q0, qdot0, jnp.asarray(ts),
+                                                    jnp.asarray(tol)))
 
 
 def bench_params(gravity=G, spring=0.0, bushing=(0.0,) * 6):
@@ -111,8 +111,8 @@ def swinging():
     q0, qd0 = bench_state((0.0, 2.0, 0.0), qt.from_axis_angle([1, 1, 0.0], 0.3),
                           (1.0, 0.5, 2.0), (0.2, 0.0, 0.1), pendulum_moving=True)
     ts = jnp.linspace(0.0, 10.0, N_SAVE)
-    qs, qds = simulate_bench(BENCH_PARAMS, q0, qd0, ts, SWING_TOL)
-    return q0, qd0, np.asarray(ts), qs, qds, diagnostics(BENCH_PARAMS, qs, qds)
+    qs, qds, d = simulate_bench(BENCH_PARAMS, q0, qd0, ts, SWING_TOL)
+    return q0, qd0, np.asarray(ts), qs, qds, d
 
 
 def test_consistent_initial_conditions(swinging):
@@ -152,8 +152,7 @@ def test_free_body_without_gravity_conserves_energy_and_angular_momentum():
     q0, qd0 = bench_state((0.3, -0.2, 0.1), qt.from_axis_angle([1.0, 2.0, 3.0], 0.4),
                           (0.1, 0.0, -0.2), (1.0, 0.5, -0.7), pendulum_moving=False)
     ts = jnp.linspace(0.0, 10.0, N_SAVE)
-    qs, qds = simulate_bench(params, q0, qd0, ts, 1e-12)
-    d = diagnostics(params, qs, qds)
+    qs, qds, d = simulate_bench(params, q0, qd0, ts, 1e-12)
     # The pendulum hangs at rest without gravity, so the totals are the free body's.
     drift_e = np.max(np.abs(d["kinetic"] / d["kinetic"][0] - 1.0))
     h = d["momentum"]
@@ -176,7 +175,7 @@ def test_spring_mass_and_torsional_bushing_frequencies():
                           qt.from_axis_angle([0, 0, 1.0], theta0),
                           (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), pendulum_moving=False)
     ts = jnp.linspace(0.0, 3.0, N_SAVE)
-    qs, _ = simulate_bench(params, q0, qd0, ts, 1e-12)
+    qs, _, _ = simulate_bench(params, q0, qd0, ts, 1e-12)
     t = np.asarray(ts)
     x_expected = free_length + amp * np.cos(np.sqrt(k / MASS) * t)
     np.testing.assert_allclose(qs[:, 14], x_expected, rtol=0, atol=1e-9)
@@ -191,9 +190,8 @@ def test_baumgarte_stabilisation_reduces_the_drift(swinging):
     params = eqx.tree_at(lambda p: (p.baumgarte_alpha, p.baumgarte_beta), BENCH_PARAMS,
                          (jnp.asarray(0.0, dtype=jnp.float64),
                           jnp.asarray(0.0, dtype=jnp.float64)))
-    qs_free, qds_free = simulate_bench(params, q0, qd0, jnp.asarray(ts), SWING_TOL)
-    assert simulate_bench._cache_size() == 1  # the gains are traced: no recompilation
-    d_free = diagnostics(params, qs_free, qds_free)
+    qs_free, _, d_free = simulate_bench(params, q0, qd0, ts, SWING_TOL)
+    assert _simulate_bench._cache_size() == 1  # the gains are traced: no recompilation
     assert np.max(d_free["phi"]) > 10.0 * np.max(d["phi"])
     # Same motion up to the drift (amplified over 10 s by the chaotic double pendulum).
     assert np.max(np.abs(np.asarray(qs_free) - np.asarray(qs))) < 1e-3
