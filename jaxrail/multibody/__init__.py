@@ -12,6 +12,8 @@ from .bodies import RigidBody as RigidBody
 from .bodies import angular_velocity as angular_velocity
 from .bodies import body_pose as body_pose
 from .bodies import join_coordinates as join_coordinates
+from .bodies import point_position as point_position
+from .bodies import point_velocity as point_velocity
 from .bodies import split_coordinates as split_coordinates
 from .bodies import velocities_from_twists as velocities_from_twists
 from .forces import Bushing as Bushing
