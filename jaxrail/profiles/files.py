@@ -256,6 +256,7 @@ def write_profile_csv(
             stream.write("\n".join(lines) + "\n")
             stream.flush()
             os.fsync(stream.fileno())
+        os.chmod(temporary, 0o644)  # mkstemp makes the file private; a profile is not
         os.replace(temporary, path)
     except BaseException:
         if os.path.exists(temporary):
