@@ -10,13 +10,11 @@ import csv
 import io
 import json
 import math
-import os
-import tempfile
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._files import write_text as write_text
 from .conicity import equivalent_conicity
 from .quasistatic import wheelset_geometry
 
@@ -140,21 +138,3 @@ def report_csv(report) -> str:
                                 + [repr(patch[key]) for key, _ in _PATCH_FIELDS]
                                 + [repr(row["roll_rad"]), repr(row["delta_r_mm"])])
     return stream.getvalue()
-
-
-def write_text(path, text):
-    """Write ``text`` to ``path`` whole or not at all (temporary file in the same
-    directory, then ``os.replace``); an existing file is left as it was on failure."""
-    directory = os.path.dirname(os.path.abspath(path))
-    handle, temporary = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.", suffix=".tmp",
-                                         dir=directory)
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(text)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(temporary, 0o666 & ~umask)  # mkstemp creates 0600; give the usual mode
-        os.replace(temporary, path)
-    finally:
-        if os.path.exists(temporary):
-            os.unlink(temporary)

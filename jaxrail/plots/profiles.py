@@ -6,6 +6,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from .._files import write_atomically  # noqa: E402
 from ..contact.search import HALF_TAPING_DISTANCE  # noqa: E402
 from ..profiles import sample_profile  # noqa: E402
 from ..profiles.measures import rail_offset  # noqa: E402
@@ -47,18 +48,9 @@ def rail_name(rail):
 
 
 def save_figure(fig, path):
-    """Save ``fig`` to ``path`` whole or not at all (temporary file, then rename)."""
-    import os
-    import tempfile
-
-    directory = os.path.dirname(os.path.abspath(path))
-    handle, temporary = tempfile.mkstemp(suffix=".png", dir=directory)
-    os.close(handle)
+    """Save ``fig`` as PNG to ``path`` whole or not at all, and close it."""
     try:
-        fig.savefig(temporary, bbox_inches="tight")
-        os.chmod(temporary, 0o644)
-        os.replace(temporary, path)
+        write_atomically(path, lambda temporary: fig.savefig(temporary, format="png",
+                                                             bbox_inches="tight"))
     finally:
         plt.close(fig)
-        if os.path.exists(temporary):
-            os.unlink(temporary)

@@ -28,13 +28,13 @@ is the gauge side. Point weights (a third column) are ignored.
 
 import os
 import re
-import tempfile
 from pathlib import Path
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._files import write_text
 from ._base import Profile, WheelProfile
 from .tabulated import TabulatedProfile, _validate_points, tabulated_rail, tabulated_wheel
 
@@ -249,19 +249,7 @@ def write_profile_csv(
         lines += [f"# {text}".rstrip() for text in str(header).splitlines()]
     lines.append("y_mm,z_mm")
     lines += [f"{a:.17g},{b:.17g}" for a, b in zip(y, z)]
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp",
-                                         dir=path.parent if str(path.parent) else ".")
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write("\n".join(lines) + "\n")
-            stream.flush()
-            os.fsync(stream.fileno())
-        os.chmod(temporary, 0o644)  # mkstemp makes the file private; a profile is not
-        os.replace(temporary, path)
-    except BaseException:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
-        raise
+    write_text(path, "\n".join(lines) + "\n")
 
 
 @jax.jit

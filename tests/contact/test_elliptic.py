@@ -1,7 +1,6 @@
 """Complete elliptic integrals: values vs scipy/mpmath, derivatives vs formulas and FD."""
 
 import jax
-import jax.numpy as jnp
 import mpmath
 import numpy as np
 import pytest

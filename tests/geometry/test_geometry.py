@@ -1,7 +1,6 @@
 """Quasi-static geometry against an independent NumPy brute-force search, mirror
 symmetry, two-point contact, and the EN 15302 conicity integral."""
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
