@@ -226,10 +226,9 @@ def search_wheelset(wheel, rail, track, rail_offset, wheelset_position, wheelset
 
 def search_vehicle(wheel, rail, track, rail_offset, wheelset_positions, wheelset_rotations,
                    config: SearchConfig = SearchConfig(), s_guesses=None) -> ContactPatches:
-    """All wheels of a vehicle in one call: positions ``(W, 3)``, rotations ``(W, 3, 3)``;
-    leading shape ``(W, 2, P)``."""
-    if s_guesses is None:
-        return jax.vmap(lambda p, r: search_wheelset(wheel, rail, track, rail_offset, p, r, config))(
-            wheelset_positions, wheelset_rotations)
-    return jax.vmap(lambda p, r, s: search_wheelset(wheel, rail, track, rail_offset, p, r, config, s))(
-        wheelset_positions, wheelset_rotations, s_guesses)
+    """All wheels of a vehicle in one call: positions ``(W, 3)``, rotations ``(W, 3, 3)``,
+    optional arc-length guesses ``(W,)``; leading shape ``(W, 2, P)``."""
+    return jax.vmap(
+        lambda p, r, s: search_wheelset(wheel, rail, track, rail_offset, p, r, config, s),
+        in_axes=(0, 0, None if s_guesses is None else 0),
+    )(wheelset_positions, wheelset_rotations, s_guesses)
