@@ -370,13 +370,14 @@ def consistent_initial_conditions(system: System, params: SystemParams, q0, qdot
 def simulate_system(system: System, params: SystemParams, q0, qdot0, t1, dt0=1e-3,
                     saveat=None, rtol=1e-8, atol=1e-8, solver=None, t0=0.0,
                     external=None, max_steps=100_000, adjoint=None, throw=True,
-                    stepsize_controller=None):
+                    stepsize_controller=None, event=None, progress_meter=None):
     """Integrate eq. (19) with diffrax from (q0, qdot0) at t0 [s] to t1 [s].
 
     Returns diffrax's Solution, with ys = (q (..., 7 n), qdot (..., 7 n)) at `saveat`
     (default: t1 only). solver defaults to Tsit5; stepsize_controller to a
     PIDController with rtol, atol (pass diffrax.ConstantStepSize() for fixed steps
-    dt0); adjoint to RecursiveCheckpointAdjoint (reverse-mode AD works).
+    dt0); adjoint to RecursiveCheckpointAdjoint (reverse-mode AD works). event and
+    progress_meter are passed to diffrax (a terminating diffrax.Event, a progress meter).
     """
     y0 = (jnp.asarray(q0, dtype=jnp.float64), jnp.asarray(qdot0, dtype=jnp.float64))
     return diffrax.diffeqsolve(
@@ -393,4 +394,6 @@ def simulate_system(system: System, params: SystemParams, q0, qdot0, t1, dt0=1e-
         max_steps=max_steps,
         adjoint=diffrax.RecursiveCheckpointAdjoint() if adjoint is None else adjoint,
         throw=throw,
+        event=event,
+        progress_meter=diffrax.NoProgressMeter() if progress_meter is None else progress_meter,
     )

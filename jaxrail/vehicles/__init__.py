@@ -1,9 +1,18 @@
-"""Vehicles: wheel-rail coupling of wheelsets, a single free wheelset (the trailer
-model follows)."""
+"""Vehicles: wheel-rail coupling of wheelsets, the paper's 11-body trailer, a single
+free wheelset, and their initial static equilibrium."""
 
+from .initial import initial_state as initial_state
+from .initial import wheelset_rest_height as wheelset_rest_height
 from .single_wheelset import simulate_single_wheelset as simulate_single_wheelset
+from .single_wheelset import single_wheelset as single_wheelset
 from .single_wheelset import touching_height as touching_height
-
+from .trailer import read_vehicle_data as read_vehicle_data
+from .trailer import static_loads as static_loads
+from .trailer import trailer as trailer
+from .trailer import trailer_values as trailer_values
+from .vehicle import Vehicle as Vehicle
+from .vehicle import VehicleParams as VehicleParams
+from .vehicle import contact_loads as contact_loads
 from .wheel_rail import ContactParameters as ContactParameters
 from .wheel_rail import PatchForces as PatchForces
 from .wheel_rail import wheelset_contact_loads as wheelset_contact_loads

@@ -14,6 +14,8 @@ from ..contact.pose import wheelset_pose
 from ..contact.search import SearchConfig, search_wheelset
 from ..multibody import (RigidBody, angular_velocity, body_pose, build_system,
                          join_coordinates, quaternion, simulate_system, velocities_from_twists)
+from ..profiles import rail_offset
+from .vehicle import Vehicle, VehicleParams
 from .wheel_rail import ContactParameters, wheelset_contact_loads
 
 WHEELSET_MASS = 1813.0  # [kg] Manchester benchmark [V-src]
@@ -64,3 +66,13 @@ def simulate_single_wheelset(wheel, rail, track, rail_offset, speed, lateral, t1
         system, params, q0, qdot0, t1, dt0=1e-4, saveat=diffrax.SaveAt(ts=ts), rtol=rtol,
         atol=atol, external=external, max_steps=max_steps))
     return run(q0, qdot0), (height, patches)
+
+
+def single_wheelset(wheel, rail, contact=ContactParameters(), config=SearchConfig()):
+    """A free wheelset as a :class:`Vehicle` (one body, no suspension) for
+    :func:`jaxrail.simulate.simulate`: ``(Vehicle, VehicleParams)``."""
+    system, params = build_system([RigidBody("wheelset", WHEELSET_MASS, WHEELSET_INERTIA)], [],
+                                  [], gravity=(0.0, 0.0, -9.81))
+    vehicle = Vehicle("single wheelset", system, (0,), [(0.0, 0.0, float(wheel.nominal_radius))],
+                      wheel, rail, float(rail_offset(rail)), config)
+    return vehicle, VehicleParams(params, contact)

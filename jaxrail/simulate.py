@@ -1,0 +1,277 @@
+"""Simulation of a vehicle on a track: initial equilibrium, integration, outputs.
+
+``simulate(vehicle, track, params, t1, speed=..., misalignment=...)`` puts the vehicle
+at rest on its wheels (:func:`jaxrail.vehicles.initial_state`), integrates the
+equations of motion (eq. 19 with Baumgarte stabilisation) with the wheel-rail loads of
+every wheelset by diffrax, and returns a :class:`SimulationResult`: body states at the
+output times, the contact details of every wheel and patch recomputed from them, and a
+status. A run stops early, keeping its results so far, when a wheel derails (a
+wheelset moves sideways or a wheel rises beyond the limits of
+:class:`DerailmentLimits`) or the integration fails (non-finite state, step size
+collapse, too many steps).
+
+Solver: Tsit5 with a PID step-size controller by default (the measurement that chose
+it is in docs/simulation.md).
+"""
+
+import dataclasses
+import time
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .multibody import constraints, simulate_system
+from .track import to_track_coordinates, track_frame
+from .vehicles.initial import initial_state
+from .vehicles.vehicle import Vehicle, VehicleParams, contact_loads, wheelset_states
+
+
+def _f64(x):
+    return jnp.asarray(x, dtype=jnp.float64)
+
+
+class DerailmentLimits(eqx.Module):
+    """A run stops as derailed when any wheelset's centre is more than ``lateral`` [m]
+    from the track centreline or any wheel is ``lift`` [m] above its initial height
+    (the S1002 flange is 28 mm high: at 25 mm lift the flange is on the rail head).
+    Traced: changing them does not recompile."""
+
+    lateral: jax.Array = eqx.field(converter=_f64, default=0.035)
+    lift: jax.Array = eqx.field(converter=_f64, default=0.025)
+
+
+@dataclasses.dataclass(frozen=True)
+class SolverOptions:
+    """Integration settings (static: changing them recompiles).
+
+    rtol, atol: PID controller tolerances; dt0 [s]: first step; max_steps: per run;
+    n_outputs: number of equally spaced output times (including t = 0 and t1);
+    progress: show a tqdm progress bar of simulated time.
+    """
+
+    rtol: float = 1e-5
+    atol: float = 1e-8
+    dt0: float = 1e-4
+    max_steps: int = 2_000_000
+    n_outputs: int = 201
+    progress: bool = False
+
+
+class WheelOutputs(eqx.Module):
+    """Contact details at the output times; leading shape (T, W, 2, P): time, wheelset
+    (leading first), wheel (left, right), patch slot.
+
+    Fields: active; surface (index into the wheel's surfaces); y_wheel, y_rail [m]
+    lateral position of the contact point on the wheel and rail profiles; penetration
+    [m]; contact_angle [rad]; normal_force [N]; creep_force_x, creep_force_y [N]
+    (contact frame, on the wheel); creepage_x, creepage_y [-], spin [1/m].
+    Per wheel (T, W, 2): lateral_force Y and vertical_force Q [N], track frame, on the
+    wheel from the rail (Y positive towards the wheel's own field side).
+    """
+
+    active: jax.Array
+    surface: jax.Array
+    y_wheel: jax.Array
+    y_rail: jax.Array
+    penetration: jax.Array
+    contact_angle: jax.Array
+    normal_force: jax.Array
+    creep_force_x: jax.Array
+    creep_force_y: jax.Array
+    creepage_x: jax.Array
+    creepage_y: jax.Array
+    spin: jax.Array
+    lateral_force: jax.Array
+    vertical_force: jax.Array
+
+
+class SimulationResult(eqx.Module):
+    """Output of :func:`simulate`.
+
+    Fields:
+        t (T,) [s]; q, qdot (T, 7 n): body states (jaxrail.multibody conventions);
+        valid (T,): output times the run reached (False after an early stop);
+        wheelset_lateral, wheelset_vertical, wheelset_yaw (T, W): wheelset centre
+            relative to the track centreline [m] and yaw relative to the track [rad];
+        wheels: :class:`WheelOutputs`;
+        constraint_violation (T,): max |Phi| over the joint rows;
+        result: diffrax's result code; derailed: the derailment event fired;
+        steps, accepted_steps, rejected_steps: integrator statistics;
+        wall_time_s, compile_time_s: host timings (NaN inside jit/vmap).
+    """
+
+    t: jax.Array
+    q: jax.Array
+    qdot: jax.Array
+    valid: jax.Array
+    wheelset_lateral: jax.Array
+    wheelset_vertical: jax.Array
+    wheelset_yaw: jax.Array
+    wheels: WheelOutputs
+    constraint_violation: jax.Array
+    result: diffrax.RESULTS
+    derailed: jax.Array
+    steps: jax.Array
+    accepted_steps: jax.Array
+    rejected_steps: jax.Array
+    wall_time_s: jax.Array
+    compile_time_s: jax.Array
+
+    @property
+    def status(self) -> str:
+        """"successful", "derailed", "max_steps_reached", or "failed: <diffrax message>"
+        (host only, for an unbatched result)."""
+        if bool(self.derailed):
+            return "derailed"
+        if self.result == diffrax.RESULTS.successful:
+            return "successful"
+        if self.result == diffrax.RESULTS.max_steps_reached:
+            return "max_steps_reached"
+        return "failed"
+
+    @property
+    def simulated_time_s(self) -> float:
+        """Last output time the run reached [s]."""
+        return float(np.max(np.where(np.asarray(self.valid), np.asarray(self.t), 0.0)))
+
+
+def _wheelset_track_coordinates(vehicle, track, q, qdot):
+    """Lateral [m], vertical [m] offsets and yaw [rad] of each wheelset relative to the
+    track, and the lift [m] of each wheel (W, 2) above the track plane minus the
+    nominal radius."""
+    position, rotation, _, _ = wheelset_states(vehicle, q, qdot)
+
+    def one(r, a):
+        s, lateral, vertical = to_track_coordinates(track, r)
+        frame = track_frame(track, s)
+        axle = frame.T @ a[:, 1]
+        yaw = -jnp.arctan2(axle[0], axle[1])
+        half = 0.75
+        wheel_heights = vertical + jnp.array([half, -half]) * axle[2]
+        return lateral, vertical, yaw, wheel_heights
+    return jax.vmap(one)(position, rotation)
+
+
+def _derailment_event(vehicle, track, limits, rest_height):
+    def cond(t, y, args, **kwargs):
+        q, qdot = y
+        lateral, _, _, heights = _wheelset_track_coordinates(vehicle, track, q, qdot)
+        lifted = jnp.any(heights - rest_height > limits.lift)
+        off = jnp.any(jnp.abs(lateral) > limits.lateral)
+        return lifted | off | ~jnp.all(jnp.isfinite(q))
+    return diffrax.Event(cond)
+
+
+def _wheel_outputs(vehicle, params, track, q, qdot):
+    """WheelOutputs at one state (leading shape (W, 2, P))."""
+    _, _, patches, forces = contact_loads(vehicle, params.contact, track, q, qdot)
+    position, _, _, _ = wheelset_states(vehicle, q, qdot)
+    frames = jax.vmap(lambda r: track_frame(track, to_track_coordinates(track, r)[0]))(position)
+    side = jnp.array([1.0, -1.0])[None, :]
+    total = jnp.sum(forces.force, axis=2)  # (W, 2, 3)
+    lateral = jnp.einsum("wsi,wi->ws", total, frames[:, :, 1]) * side
+    vertical = jnp.einsum("wsi,wi->ws", total, frames[:, :, 2])
+    return WheelOutputs(patches.active, patches.surface, patches.y_wheel, patches.y_rail,
+                        patches.penetration, patches.contact_angle, forces.normal_force,
+                        forces.creep_force_x, forces.creep_force_y, forces.creepage_x,
+                        forces.creepage_y, forces.spin, lateral, vertical)
+
+
+def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignment=0.0,
+          s0=None, options: SolverOptions = SolverOptions(),
+          limits: DerailmentLimits = DerailmentLimits(), solver=None, adjoint=None,
+          initial=None):
+    """The traceable core of :func:`simulate` (jit, vmap and grad it): returns a
+    :class:`SimulationResult` without host timings. ``t1`` [s], ``speed`` [m/s] and
+    ``misalignment`` [m] may be traced. ``initial``: ``(q0, qdot0)`` to start from
+    instead of the static equilibrium (:func:`jaxrail.vehicles.initial_state`); wheel
+    lifts and vertical displacements are measured from the initial state."""
+    if initial is None:
+        q0, qdot0 = initial_state(vehicle, params, track, speed, misalignment, s0)
+    else:
+        q0, qdot0 = (jnp.asarray(x, dtype=jnp.float64) for x in initial)
+    _, rest_vertical, _, rest_heights = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
+    external = lambda t, q, qdot: contact_loads(vehicle, params.contact, track, q, qdot)[:2]  # noqa: E731
+    ts = jnp.linspace(0.0, t1, options.n_outputs)
+    meter = diffrax.TqdmProgressMeter() if options.progress else None
+    sol = simulate_system(
+        vehicle.system, params.system, q0, qdot0, t1, dt0=options.dt0,
+        saveat=diffrax.SaveAt(ts=ts), rtol=options.rtol, atol=options.atol, solver=solver,
+        external=external, max_steps=options.max_steps, adjoint=adjoint, throw=False,
+        event=_derailment_event(vehicle, track, limits, rest_heights), progress_meter=meter)
+    q, qdot = sol.ys
+    valid = jnp.all(jnp.isfinite(q), axis=1) & jnp.all(jnp.isfinite(qdot), axis=1)
+    # Outputs after an early stop are recomputed at the initial state and masked.
+    q_safe = jnp.where(valid[:, None], q, q0)
+    qdot_safe = jnp.where(valid[:, None], qdot, qdot0)
+    lateral, vertical, yaw, _ = jax.vmap(
+        lambda a, b: _wheelset_track_coordinates(vehicle, track, a, b))(q_safe, qdot_safe)
+    wheels = jax.lax.map(lambda y: _wheel_outputs(vehicle, params, track, *y),
+                         (q_safe, qdot_safe))
+    n_norm = vehicle.system.n_bodies
+    violation = jax.vmap(lambda a, b: jnp.max(jnp.abs(
+        constraints(vehicle.system, params.system, a, b)[0][n_norm:])))(q_safe, qdot_safe)
+    nan = lambda x: jnp.where(valid.reshape((-1,) + (1,) * (x.ndim - 1)), x, jnp.nan)  # noqa: E731
+    wheels = jax.tree.map(lambda x: nan(x) if jnp.issubdtype(x.dtype, jnp.floating) else x,
+                          wheels)
+    derailed = sol.event_mask if sol.event_mask is not None else jnp.asarray(False)
+    return SimulationResult(
+        t=sol.ts, q=q, qdot=qdot, valid=valid, wheelset_lateral=nan(lateral),
+        wheelset_vertical=nan(vertical - rest_vertical), wheelset_yaw=nan(yaw),
+        wheels=wheels, constraint_violation=nan(violation), result=sol.result,
+        derailed=jnp.asarray(derailed), steps=sol.stats["num_steps"],
+        accepted_steps=sol.stats["num_accepted_steps"],
+        rejected_steps=sol.stats["num_rejected_steps"],
+        wall_time_s=jnp.asarray(jnp.nan), compile_time_s=jnp.asarray(jnp.nan))
+
+
+_solve_jit = eqx.filter_jit(solve)
+_initial_jit = eqx.filter_jit(initial_state)
+_compiled = {}
+
+
+def _compile(function, *args, **kwargs):
+    """AOT-compile ``function`` for these arguments once per static structure and
+    argument shapes; returns (compiled, compile time [s], 0 if it was cached)."""
+    leaves, structure = jax.tree.flatten((args, kwargs))
+    key = (id(function), structure, tuple((x.shape, x.dtype) if eqx.is_array(x) else x
+                                      for x in leaves))
+    if key in _compiled:
+        return _compiled[key], 0.0
+    start = time.perf_counter()
+    _compiled[key] = function.lower(*args, **kwargs).compile()
+    return _compiled[key], time.perf_counter() - start
+
+
+def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: float,
+             misalignment: float = 0.0, s0=None, options: SolverOptions = SolverOptions(),
+             limits: DerailmentLimits = DerailmentLimits(), initial=None) -> SimulationResult:
+    """Run a vehicle along a track for ``t1`` [s] at ``speed`` [m/s] from static
+    equilibrium, shifted ``misalignment`` [m] to the left (or from ``initial`` =
+    ``(q0, qdot0)``); see the module docstring.
+
+    The two compiled programs (initial equilibrium, integration) are cached: a second
+    call with the same vehicle structure and options does not recompile, whatever the
+    numbers. Returns a :class:`SimulationResult` with wall and compile times [s].
+    """
+    start = time.perf_counter()
+    t1, speed, misalignment = (jnp.float64(x) for x in (t1, speed, misalignment))
+    s0 = None if s0 is None else jnp.float64(s0)
+    compile_time = 0.0
+    if initial is None:
+        make, seconds = _compile(_initial_jit, vehicle, params, track, speed, misalignment, s0)
+        compile_time += seconds
+        initial = make(vehicle, params, track, speed, misalignment, s0)
+    initial = tuple(jnp.asarray(x, dtype=jnp.float64) for x in initial)
+    args = (vehicle, track, params, t1, speed, misalignment, s0)
+    kwargs = dict(options=options, limits=limits, initial=initial)
+    run, seconds = _compile(_solve_jit, *args, **kwargs)
+    compile_time += seconds
+    result = run(*args, **kwargs)
+    jax.block_until_ready(result)
+    wall = time.perf_counter() - start - compile_time
+    return eqx.tree_at(lambda r: (r.wall_time_s, r.compile_time_s), result,
+                       (jnp.asarray(wall), jnp.asarray(compile_time)))

@@ -1,0 +1,96 @@
+"""A rail vehicle: a multibody system some of whose bodies are wheelsets on the track.
+
+:class:`Vehicle` is the static part (the multibody structure, which bodies are
+wheelsets, the wheel and rail profiles, where each body sits in the vehicle when it
+is at rest, the search settings); :class:`VehicleParams` is the pytree of every
+number that may be changed, batched or differentiated without recompiling (masses,
+suspension, contact parameters).
+
+Vehicle frame (used for the nominal layout): x forward, y left, z up, origin on the
+track centreline at the reference point of the vehicle (the carbody centre), z = 0
+at the rail tops.
+"""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..contact.search import SearchConfig
+from ..multibody import System, SystemParams
+from ..multibody import quaternion as qt
+from ..profiles import Profile, WheelProfile
+from .wheel_rail import ContactParameters, wheelset_contact_loads
+
+
+class Vehicle(eqx.Module):
+    """Static description of a vehicle.
+
+    Fields:
+        name: label for outputs.
+        system: multibody structure (:func:`jaxrail.multibody.build_system`).
+        wheelsets: indices of the wheelset bodies, leading first (tuple of ints).
+        layout: n rows (x, y, z), the nominal centre of each body in the vehicle frame [m] at rest
+            (wheelset heights are placeholders: the static equilibrium on the rails
+            sets them, and shifts the sprung bodies with them).
+        wheel, rail: profiles of every wheel and rail.
+        rail_offset: track centre to rail profile origin [m].
+        config: contact search settings.
+    """
+
+    name: str = eqx.field(static=True)
+    system: System
+    wheelsets: tuple[int, ...] = eqx.field(static=True)
+    layout: tuple[tuple[float, float, float], ...] = eqx.field(
+        static=True, converter=lambda x: tuple(tuple(float(v) for v in row) for row in x))
+    wheel: WheelProfile
+    rail: Profile
+    rail_offset: float = eqx.field(static=True)
+    config: SearchConfig = eqx.field(static=True, default=SearchConfig())
+
+    @property
+    def n_wheelsets(self) -> int:
+        return len(self.wheelsets)
+
+    @property
+    def nominal_radius(self):
+        """Nominal wheel radius [m] (an array: the profiles may be traced)."""
+        return self.wheel.nominal_radius
+
+
+class VehicleParams(eqx.Module):
+    """Every number of a vehicle as float64 arrays: ``system`` (masses, inertias,
+    joints, suspension) and ``contact`` (:class:`ContactParameters`)."""
+
+    system: SystemParams
+    contact: ContactParameters
+
+
+def wheelset_states(vehicle: Vehicle, q, qdot):
+    """Positions (W, 3), rotations (W, 3, 3), velocities (W, 3) and angular velocities
+    (W, 3) of the wheelsets, global [m, -, m/s, rad/s]."""
+    index = np.asarray(vehicle.wheelsets)
+    body = q.reshape(-1, 7)[index]
+    rate = qdot.reshape(-1, 7)[index]
+    rotation = jax.vmap(qt.rotation_matrix)(body[:, 3:])
+    omega = 2.0 * jnp.einsum("wij,wj->wi", jax.vmap(qt.e_matrix)(body[:, 3:]), rate[:, 3:])
+    return body[:, :3], rotation, rate[:, :3], omega
+
+
+def contact_loads(vehicle: Vehicle, contact: ContactParameters, track, q, qdot):
+    """Wheel-rail loads on all bodies and the contact details.
+
+    Returns ``(forces (n, 3) [N], torques (n, 3) [N m], patches, patch_forces)``: the
+    forces at the body centres and the torques, global (zero on bodies that are not
+    wheelsets), and per wheelset (leading axis W) the contact patches and their forces.
+    """
+    position, rotation, velocity, omega = wheelset_states(vehicle, q, qdot)
+    load = lambda r, a, v, w: wheelset_contact_loads(  # noqa: E731
+        vehicle.wheel, vehicle.rail, track, vehicle.rail_offset, contact, r, a, v, w,
+        vehicle.config)
+    force, moment, patches, patch_forces = jax.vmap(load)(position, rotation, velocity, omega)
+    n = vehicle.system.n_bodies
+    index = np.asarray(vehicle.wheelsets)
+    forces = jnp.zeros((n, 3)).at[index].set(force)
+    torques = jnp.zeros((n, 3)).at[index].set(moment)
+    return forces, torques, patches, patch_forces
