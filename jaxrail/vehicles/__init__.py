@@ -2,7 +2,7 @@
 free wheelset, and their initial static equilibrium."""
 
 from .initial import initial_state as initial_state
-from .initial import wheelset_rest_height as wheelset_rest_height
+from .initial import wheelset_rest_pose as wheelset_rest_pose
 from .single_wheelset import simulate_single_wheelset as simulate_single_wheelset
 from .single_wheelset import single_wheelset as single_wheelset
 from .single_wheelset import touching_height as touching_height

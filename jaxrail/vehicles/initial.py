@@ -2,10 +2,11 @@
 
 Static equilibrium: the suspension bushings carry the static loads as preloads at the
 nominal layout (:mod:`jaxrail.vehicles.trailer`), so the sprung bodies are in
-equilibrium where the layout puts them; each wheelset is lowered into the rails until
-its vertical wheel-rail force equals its share of the vehicle's weight (the vehicle
-is assumed symmetric: weight / number of wheelsets each). The sprung bodies follow the
-wheelsets' mean height. A lateral misalignment shifts the whole vehicle sideways.
+equilibrium where the layout puts them. Each wheelset is lowered into the rails and
+rolled until each of its wheels carries half of the wheelset's share of the vehicle's
+weight (the vehicle is assumed symmetric: weight / number of wheelsets). Axlebox
+bodies take their wheelset's height and roll; the other bodies follow the wheelsets'
+mean height. A lateral misalignment shifts the whole vehicle sideways.
 """
 
 import jax
@@ -20,60 +21,86 @@ from ..track import track_frame
 from .vehicle import Vehicle, VehicleParams
 from .wheel_rail import wheelset_contact_loads
 
-BISECTION_STEPS = 60
+HEIGHT_BISECTIONS = 50  # from [r0/2, 3 r0/2]: 4e-16 m
+ROLL_BISECTIONS = 40  # from [-MAX_ROLL, MAX_ROLL]: 4e-14 rad
+MAX_ROLL = 0.02  # [rad]
+STEP = 1e-7  # finite-difference step in height [m] and roll [rad]
 
 
-def _vertical_wheel_force(vehicle, params, track, s, lateral, height, speed):
-    """Upward wheel-rail force [N] (track normal) on a wheelset at ``s`` [m], shifted
-    ``lateral`` [m], its centre ``height`` [m] above the track plane, moving at
-    ``speed`` [m/s] and spinning at speed / nominal radius (the spin creepage of the
-    conical contact gives lateral creep forces with a vertical component)."""
-    position, rotation = wheelset_pose(track, s, lateral, height)
+def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed):
+    """Upward wheel-rail forces [N] (2,) (left, right wheel; track normal) on a wheelset
+    at ``s`` [m], shifted ``lateral`` [m], its centre ``height`` [m] above the track
+    plane, rolled by ``roll`` [rad], moving at ``speed`` [m/s] and spinning at speed /
+    nominal radius (the spin creepage of the coned contact gives lateral creep forces
+    with a vertical component), and the mid-overlap rolling radius [m] weighted by
+    normal force."""
+    position, rotation = wheelset_pose(track, s, lateral, height, roll)
     velocity = speed * rotation[:, 0]
     spin = (speed / vehicle.nominal_radius) * rotation[:, 1]
-    force, _, patches, forces = wheelset_contact_loads(
+    _, _, patches, forces = wheelset_contact_loads(
         vehicle.wheel, vehicle.rail, track, vehicle.rail_offset, params.contact, position,
         rotation, velocity, spin, vehicle.config)
-    return force @ track_frame(track, s)[:, 2], (patches, forces)
+    up = track_frame(track, s)[:, 2]
+    loads = jnp.sum(forces.force @ up, axis=1)
+    weight = jnp.where(patches.active, forces.normal_force, 0.0)
+    radius = jnp.sum(weight * (patches.rolling_radius - 0.5 * patches.penetration))
+    return loads, radius / jnp.sum(weight)
 
 
-def wheelset_rest_height(vehicle: Vehicle, params: VehicleParams, track, s, lateral, load,
-                         speed=0.0):
-    """Centre height [m] above the track plane at which a wheelset at arc length ``s``
-    [m], shifted ``lateral`` [m] and rolling at ``speed`` [m/s], carries ``load`` [N]
-    on the rails, and its mean rolling radius [m] there (weighted by normal force).
+def wheelset_rest_pose(vehicle: Vehicle, params: VehicleParams, track, s, lateral, load,
+                       speed=0.0):
+    """Centre height [m] above the track plane and roll [rad] at which each wheel of a
+    wheelset at arc length ``s`` [m], shifted ``lateral`` [m] and rolling at ``speed``
+    [m/s], carries ``load / 2`` [N]; and the rolling radius [m] there (to the middle
+    of the overlap, weighted by normal force).
 
-    Bisection (60 steps, no gradient) followed by one Newton step, which carries the
-    derivative with respect to the parameters (implicit function theorem).
+    Nested bisections without gradient: on the roll (within 20 mrad) for equal wheel
+    loads, each with a bisection on the height for the total load. Then one Newton
+    step on (height, roll) with a finite-difference Jacobian, which carries the
+    derivative with respect to the parameters (implicit function theorem) and compiles
+    no derivative of the contact search.
     """
-    r0 = vehicle.nominal_radius
+    frozen = jax.lax.stop_gradient((params, s, lateral, speed, load))
 
-    frozen = jax.lax.stop_gradient((params, s, lateral, load, speed))
-    frozen_force = lambda h: _vertical_wheel_force(  # noqa: E731
-        vehicle, frozen[0], track, frozen[1], frozen[2], h, frozen[4])[0]
+    def loads(p, h, roll):
+        return _wheel_loads(vehicle, p, track, frozen[1], frozen[2], h, roll, frozen[3])
 
-    def bisect(_, bounds):
-        lo, hi = bounds
+    def residual_and_jacobian(p, pose):
+        probes = pose + jnp.array([[0.0, 0.0], [STEP, 0.0], [0.0, STEP]])
+        f, radius = jax.vmap(lambda x: loads(p, x[0], x[1]))(probes)
+        residual = f - 0.5 * load
+        jacobian = jax.lax.stop_gradient(jnp.stack([f[1] - f[0], f[2] - f[0]], axis=1) / STEP)
+        d_radius = jax.lax.stop_gradient(jnp.stack([radius[1] - radius[0],
+                                                    radius[2] - radius[0]]) / STEP)
+        return residual[0], jacobian, radius[0], d_radius
+
+    def height_for(roll):
+        """Bisection on the height at this roll for the total load."""
+        def bisect(_, bounds):
+            lo, hi = bounds
+            mid = 0.5 * (lo + hi)
+            heavy = jnp.sum(loads(frozen[0], mid, roll)[0]) > frozen[4]  # too deep: raise
+            return jnp.where(heavy, mid, lo), jnp.where(heavy, hi, mid)
+        r0 = jax.lax.stop_gradient(vehicle.nominal_radius)
+        lo, hi = jax.lax.fori_loop(0, HEIGHT_BISECTIONS, bisect, (0.5 * r0, 1.5 * r0))
+        return 0.5 * (lo + hi)
+
+    def bisect_roll(_, state):
+        lo, hi, _, _ = state
         mid = 0.5 * (lo + hi)
-        heavy = frozen_force(mid) > frozen[3]  # too deep: raise the wheelset
-        return jnp.where(heavy, mid, lo), jnp.where(heavy, hi, mid)
+        height = height_for(mid)
+        left, right = loads(frozen[0], height, mid)[0]
+        more_left = left > right  # positive roll lifts the left wheel
+        return jnp.where(more_left, mid, lo), jnp.where(more_left, hi, mid), height, mid
 
-    lo, hi = jax.lax.fori_loop(0, BISECTION_STEPS, bisect,
-                               (jnp.asarray(0.5 * r0), jnp.asarray(1.5 * r0)))
-    h = jax.lax.stop_gradient(0.5 * (lo + hi))
-    # Newton step with a finite-difference slope: no derivative of the search is
-    # compiled here, and the step still carries dh/dparams = -(dF/dparams) / slope.
-    step = 1e-7
-    value, (patches, forces) = jax.vmap(
-        lambda h: _vertical_wheel_force(vehicle, params, track, s, lateral, h, speed))(
-        jnp.stack([h, h + step]))
-    slope = jax.lax.stop_gradient((value[1] - value[0]) / step)
-    h = h - (value[0] - load) / slope
-    # Rolling radius to the middle of the overlap, where the creepages are taken.
-    weight = jnp.where(patches.active[0], forces.normal_force[0], 0.0)
-    radius = patches.rolling_radius[0] - 0.5 * patches.penetration[0]
-    radius = jnp.sum(weight * radius) / jnp.sum(weight)
-    return h, radius
+    zero = jnp.zeros(())
+    *_, height, roll = jax.lax.fori_loop(0, ROLL_BISECTIONS, bisect_roll,
+                                         (zero - MAX_ROLL, zero + MAX_ROLL, zero, zero))
+    pose = jnp.stack([height, roll])
+    pose = jax.lax.stop_gradient(pose)
+    residual, jacobian, radius, d_radius = residual_and_jacobian(params, pose)
+    step = -jnp.linalg.solve(jacobian, residual)
+    return pose[0] + step[0], pose[1] + step[1], radius + d_radius @ step
 
 
 def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalignment=0.0,
@@ -96,20 +123,24 @@ def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalig
     wheelsets = np.asarray(vehicle.wheelsets)
     mass = params.system.bodies.mass
     load = -jnp.sum(mass) * params.system.gravity[2] / len(wheelsets)
-    heights, radii = jax.vmap(lambda s: wheelset_rest_height(
+    heights, rolls, radii = jax.vmap(lambda s: wheelset_rest_pose(
         vehicle, params, track, s, misalignment, load, speed))(s0 + layout[wheelsets, 0])
     lift = jnp.mean(heights) - vehicle.nominal_radius
 
-    def place(x, y, z, is_wheelset, height):
+    # per body: its own wheelset (wheelsets and axleboxes), or -1
+    carrier = np.full(len(layout), -1)
+    carrier[wheelsets] = np.arange(len(wheelsets))
+    carrier[np.asarray(vehicle.axleboxes, dtype=int)] = np.arange(len(vehicle.axleboxes))
+    carried = carrier >= 0
+    height = jnp.where(carried, heights[carrier], layout[:, 2] + lift)
+    roll = jnp.where(carried, rolls[carrier], 0.0)
+
+    def place(x, y, vertical, roll):
         s = s0 + x
-        vertical = jnp.where(is_wheelset, height, z + lift)
-        position, rotation = wheelset_pose(track, s, y + misalignment, vertical)
+        position, rotation = wheelset_pose(track, s, y + misalignment, vertical, roll)
         return position, qt.from_rotation_matrix(rotation), speed * track_frame(track, s)[:, 0]
 
-    is_wheelset = np.isin(np.arange(len(layout)), wheelsets)
-    height = jnp.zeros(len(layout)).at[wheelsets].set(heights)
-    position, p, velocity = jax.vmap(place)(layout[:, 0], layout[:, 1], layout[:, 2],
-                                            is_wheelset, height)
+    position, p, velocity = jax.vmap(place)(layout[:, 0], layout[:, 1], height, roll)
     q = join_coordinates(position, p)
     spin = jnp.zeros(len(layout)).at[wheelsets].set(speed / radii)
     axle = jax.vmap(qt.rotation_matrix)(p)[:, :, 1]

@@ -178,5 +178,5 @@ def trailer(wheel=None, rail=None, values=None, config=SearchConfig(),
     system, system_params = build_system(bodies, joints, forces, gravity=(0.0, 0.0, -GRAVITY))
     offset = float(profile_rail_offset(rail))
     vehicle = Vehicle("trailer", system, tuple(range(7, 11)), np.array(layout), wheel, rail,
-                      offset, config)
+                      offset, config, axleboxes=tuple(range(3, 7)))
     return vehicle, VehicleParams(system_params, contact)

@@ -36,6 +36,8 @@ class Vehicle(eqx.Module):
         wheel, rail: profiles of every wheel and rail.
         rail_offset: track centre to rail profile origin [m].
         config: contact search settings.
+        axleboxes: indices of bodies that ride on the wheelsets (same order as
+            ``wheelsets``, or empty): they start at their wheelset's height and roll.
     """
 
     name: str = eqx.field(static=True)
@@ -47,6 +49,7 @@ class Vehicle(eqx.Module):
     rail: Profile
     rail_offset: float = eqx.field(static=True)
     config: SearchConfig = eqx.field(static=True, default=SearchConfig())
+    axleboxes: tuple[int, ...] = eqx.field(static=True, default=())
 
     @property
     def n_wheelsets(self) -> int:
