@@ -4,29 +4,14 @@ import argparse
 import sys
 from pathlib import Path
 
-BUILTIN_WHEELS = ("s1002", "s1002-simplified")
-BUILTIN_RAILS = ("uic60",)
-
 
 def _load_profile(name, inclination):
-    """A built-in profile by name, or a profile file (.prw/.prr/.csv/.txt)."""
-    from . import profiles
+    """A built-in profile by name, or a SIMPACK profile file (.prw/.prr)."""
+    from .profiles.named import named_profile
 
-    key = name.lower()
-    if key == "s1002":
-        return "wheel", profiles.s1002()
-    if key == "s1002-simplified":
-        return "wheel", profiles.simplified_s1002()
-    if key == "uic60":
-        return "rail", profiles.uic60(inclination)
-    path = Path(name)
-    if path.suffix.lower() in (".prw", ".prr") and path.exists():
-        profile = profiles.read_profile(path)
-        return ("wheel" if isinstance(profile, profiles.WheelProfile) else "rail"), profile
-    if path.exists():
+    if Path(name).exists() and Path(name).suffix.lower() not in (".prw", ".prr"):
         raise ValueError(f"{name}: for a text profile file use --kind wheel|rail")
-    known = ", ".join(BUILTIN_WHEELS + BUILTIN_RAILS)
-    raise ValueError(f"unknown profile {name!r}: use one of {known} or a .prw/.prr/.csv file")
+    return named_profile(name, inclination)
 
 
 def _profile_command(args):
@@ -112,6 +97,54 @@ def _geometry_command(args):
     return 0
 
 
+def _simulate_command(args):
+    import json
+
+    from . import __version__
+    from ._files import write_text
+    from .results import summarize, write_results
+    from .scenarios import load_scenario, run_scenario
+
+    scenario = load_scenario(args.scenario)
+    if args.duration is not None and not args.duration > 0.0:
+        raise ValueError(f"--duration must be > 0, got {args.duration}")
+    duration = scenario.duration if args.duration is None else args.duration
+    print(f"jaxrail simulate {scenario.name}: {scenario.description}", file=sys.stderr)
+    print(f"compiling, then simulating {duration:g} s ...", file=sys.stderr)
+    result, vehicle, params, _ = run_scenario(scenario, duration, progress=not args.quiet)
+    summary = summarize(result, friction=float(params.contact.friction))
+    summary["scenario"] = scenario.name
+    print(f"{result.status}: {result.simulated_time_s:g} s simulated in "
+          f"{float(result.wall_time_s):.1f} s (+ {float(result.compile_time_s):.1f} s "
+          f"compiling), {int(result.steps)} steps", file=sys.stderr)
+    if args.out:
+        write_results(args.out, result, metadata={
+            "scenario": scenario.name, "description": scenario.description,
+            "jaxrail_version": __version__, "body_names": list(vehicle.system.body_names)})
+        print(f"wrote {args.out}", file=sys.stderr)
+    text = json.dumps(summary, indent=2)
+    if args.summary:
+        write_text(args.summary, text + "\n")
+        print(f"wrote {args.summary}", file=sys.stderr)
+    else:
+        print(text)
+    if args.plots:
+        from .plots import curve
+
+        directory = Path(args.plots)
+        directory.mkdir(parents=True, exist_ok=True)
+        results = {scenario.name: result}
+        friction = float(params.contact.friction)
+        for name, plot in (("contact_positions", curve.plot_contact_positions),
+                           ("lateral_displacements", curve.plot_lateral_displacements),
+                           ("forces", curve.plot_forces)):
+            plot(results, directory / f"{name}.png")
+        curve.plot_derailment_ratio(results, directory / "derailment_ratio.png",
+                                    friction=friction)
+        print(f"wrote figures to {directory}", file=sys.stderr)
+    return 0 if result.status == "successful" else 1
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="jaxrail", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -142,6 +175,18 @@ def build_parser():
     geometry.add_argument("--out", help="write the table to this file (default: stdout)")
     geometry.add_argument("--plot", help="write a PNG of delta r, contact angles and contact points")
     geometry.set_defaults(run=_geometry_command)
+
+    simulate = commands.add_parser(
+        "simulate", help="run a scenario: results file, JSON summary, figures")
+    simulate.add_argument("scenario", help="paper-curve, paper-curve-simplified, straight, "
+                                           "or a scenario .toml file")
+    simulate.add_argument("--duration", type=float, help="simulated time [s] (default: the "
+                                                         "scenario's)")
+    simulate.add_argument("--out", help="write the time histories to this HDF5 file")
+    simulate.add_argument("--summary", help="write the JSON summary here (default: stdout)")
+    simulate.add_argument("--plots", help="write the figures (PNG) into this directory")
+    simulate.add_argument("--quiet", action="store_true", help="no progress bar")
+    simulate.set_defaults(run=_simulate_command)
     return parser
 
 
