@@ -70,8 +70,10 @@ class WheelOutputs(eqx.Module):
     lateral position of the contact point on the wheel and rail profiles; penetration
     [m]; contact_angle [rad]; normal_force [N]; creep_force_x, creep_force_y [N]
     (contact frame, on the wheel); creepage_x, creepage_y [-], spin [1/m].
-    Per wheel (T, W, 2): lateral_force Y and vertical_force Q [N], track frame, on the
-    wheel from the rail (Y positive towards the wheel's own field side).
+    Per wheel (T, W, 2): lateral_force and vertical_force Q [N], track frame, on the
+    wheel from the rail (lateral positive towards the wheel's own field side, so a
+    flanging wheel has a negative value; Nadal's Y, the wheel's force on the rail, is
+    its negative: :func:`jaxrail.results.derailment_ratio`).
     """
 
     active: jax.Array
