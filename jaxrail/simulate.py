@@ -217,7 +217,8 @@ def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignmen
                          (q_safe, qdot_safe))
     n_norm = vehicle.system.n_bodies
     violation = jax.vmap(lambda a, b: jnp.max(jnp.abs(
-        constraints(vehicle.system, params.system, a, b)[0][n_norm:])))(q_safe, qdot_safe)
+        constraints(vehicle.system, params.system, a, b)[0][n_norm:]), initial=0.0))(
+        q_safe, qdot_safe)
     nan = lambda x: jnp.where(valid.reshape((-1,) + (1,) * (x.ndim - 1)), x, jnp.nan)  # noqa: E731
     wheels = jax.tree.map(lambda x: nan(x) if jnp.issubdtype(x.dtype, jnp.floating) else x,
                           wheels)
