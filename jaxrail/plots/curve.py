@@ -43,6 +43,14 @@ def _panels(n, rows=1, width=4.6, height=3.4, sharey=True):
     return fig, axes
 
 
+def _finish_panel(ax, label):
+    """Title, time axis, grid and legend of one panel against time."""
+    ax.set_title(label, fontsize=9)
+    ax.set_xlabel("time [s]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+
+
 def _valid(r):
     valid = np.asarray(r.valid, dtype=bool)
     return valid, np.asarray(r.t)[valid]
@@ -91,10 +99,7 @@ def plot_lateral_displacements(results, path):
         lateral = 1e3 * np.asarray(r.wheelset_lateral)[valid]
         for w in range(lateral.shape[1]):
             ax.plot(t, lateral[:, w], lw=1, label=f"wheelset {w + 1}")
-        ax.set_title(label, fontsize=9)
-        ax.set_xlabel("time [s]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+        _finish_panel(ax, label)
     axes[0, 0].set_ylabel("lateral displacement [mm]")
     save_figure(fig, path)
 
@@ -149,9 +154,6 @@ def plot_derailment_ratio(results, path, friction=0.4, wheelset=0):
                     label=f"wheelset {wheelset + 1} {SIDES[side]}")
         ax.axhline(limit, color="k", ls="--", lw=1, label=f"Nadal limit {limit:.2f} "
                    f"(mu = {friction:g})")
-        ax.set_title(label, fontsize=9)
-        ax.set_xlabel("time [s]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+        _finish_panel(ax, label)
     axes[0, 0].set_ylabel("derailment ratio Y/Q [-]")
     save_figure(fig, path)

@@ -47,8 +47,8 @@ def simulate_single_wheelset(wheel, rail, track, rail_offset, speed, lateral, t1
     touching height and patches.
     """
     height, patches = touching_height(wheel, rail, track, rail_offset, s0, config)
-    system, params = build_system([RigidBody("wheelset", WHEELSET_MASS, WHEELSET_INERTIA)], [],
-                                  [], gravity=(0.0, 0.0, -9.81))
+    vehicle, vehicle_params = single_wheelset(wheel, rail, contact, config)
+    system, params = vehicle.system, vehicle_params.system
 
     def external(t, q, qdot):
         position, rotation = body_pose(q, 0)
