@@ -1,9 +1,10 @@
 """Contact patches from per-strip depths, and sub-strip refinement.
 
-A patch is a run of adjacent penetrating strips (DESIGN.md §4, step 3). Its contact
-point is the strip of largest penetration, refined below the strip spacing by a
-parabola through the neighbouring strips and one Newton step on ``d depth / d y``, so
-that contact positions move continuously as the pose changes.
+A patch is a run of adjacent penetrating strips (DESIGN.md §4, step 3), or one of the
+local depth maxima of a run that has several (conformal two-point contact, see
+:func:`find_patches`). Its contact point is the strip of largest penetration, refined
+below the strip spacing by a parabola through the neighbouring strips and Newton steps
+on ``d depth / d y``, so that contact positions move continuously as the pose changes.
 """
 
 import jax
@@ -30,13 +31,24 @@ def _parabola_peak(depth):
 def find_patches(
     depth: Float[Array, " n"], valid: Bool[Array, " n"], max_patches: int,
     candidate_depth: float = CANDIDATE_DEPTH,
-) -> tuple[Int[Array, " p"], Bool[Array, " p"], Int[Array, ""]]:
-    """Deepest strip of each run of (nearly) penetrating strips, deepest runs first.
+) -> tuple[Int[Array, " p"], Bool[Array, " p"], Float[Array, " p"]]:
+    """Local depth maxima of the (nearly) penetrating strips as patches, deepest first.
 
-    A strip belongs to a run when its depth is positive, or when it is a local maximum
-    whose parabola through its neighbours peaks above ``-candidate_depth``: a patch
-    narrower than the strip spacing (contact onset, the steep flange) is then still
-    found, and the caller decides from the refined depth whether it is in contact.
+    A strip is a member when its depth is positive, or when it is a local maximum whose
+    parabola through its neighbours peaks above ``-candidate_depth``: a patch narrower
+    than the strip spacing (contact onset, the steep flange) is then still found, and
+    the caller decides from the refined depth whether it is in contact.
+
+    Every local maximum of the depth over the members is a patch. Two maxima in one run
+    of members (conformal two-point contact: S1002 tread and flange root on UIC60 near
+    5 mm, centred near 0 mm) share the interpenetration below the saddle between them:
+    the maximum of strip depth ``d_i`` next to the saddle ``s > 0`` and the maximum
+    ``d_j`` across it gives up ``c_i = s (d_j - s) / ((d_i - s) + (d_j - s))`` (the larger
+    of the two where it has saddles on both sides) and keeps the fraction
+    ``1 - c_i / d_i`` of its depth. The two cuts add up to the saddle; they are symmetric,
+    vanish when the run splits (``s = 0``), and a maximum just born from a shoulder
+    (``d_i = s``) keeps nothing, so patches appear, merge and hand over load
+    continuously instead of the contact point jumping between the two regions.
 
     Arguments:
         depth: signed depth of each strip [m] (> 0 penetrating), strips in lateral order.
@@ -44,29 +56,55 @@ def find_patches(
         max_patches: number of patch slots (static).
         candidate_depth: tolerance [m] on the parabola peak of a local maximum.
 
-    Returns ``(index, found, n_runs)``: per slot the deepest strip of one of the
-    ``max_patches`` deepest runs (in lateral order, empty slots last), whether the slot
-    holds a run, and
-    the number of runs found (runs beyond ``max_patches`` are dropped).
+    Returns ``(index, found, keep)``: per slot the strip of one of the ``max_patches``
+    deepest maxima (by depth after the cut; in lateral order, empty slots last),
+    whether the slot holds one, and the fraction of its depth it keeps (multiply the
+    refined depth by it; 1 for a maximum alone in its run).
     """
+    n = depth.shape[0]
     # Neighbours outside the rail domain still give a continuous depth (to the tangent
     # at the domain end), good enough for the parabola; only the peak must be valid.
-    peak = _parabola_peak(depth)
-    member = valid & ((depth > 0.0) | (peak > -candidate_depth))
-    depth = jnp.where(valid, jnp.maximum(depth, peak), _NO_PATCH)
-    previous = jnp.concatenate([jnp.zeros((1,), bool), member[:-1]])
-    run = jnp.cumsum(member & ~previous) * member
-    n = depth.shape[0]
-    run_depth = jax.ops.segment_max(jnp.where(member, depth, _NO_PATCH), run, num_segments=n + 1)
-    run_depth = run_depth.at[0].set(2.0 * _NO_PATCH)
-    _, labels = jax.lax.top_k(run_depth, max_patches)
-    found = run_depth[labels] > _NO_PATCH
-    # Runs in lateral order, empty slots last.
-    order = jnp.argsort(jnp.where(found, labels, labels + n + 1))
-    labels, found = labels[order], found[order]
-    slots = labels[:, None] == run[None, :]
-    index = jnp.argmax(jnp.where(slots, depth[None, :], _NO_PATCH), axis=1)
-    return index, found, jnp.max(run)
+    parabola = _parabola_peak(depth)
+    member = valid & ((depth > 0.0) | (parabola > -candidate_depth))
+    inside = jnp.where(member, depth, _NO_PATCH)
+    left = jnp.concatenate([jnp.full((1,), _NO_PATCH), inside[:-1]])
+    right = jnp.concatenate([inside[1:], jnp.full((1,), _NO_PATCH)])
+    is_peak = member & ((inside >= left) & (inside > right) | (inside > left) & (inside >= right))
+
+    # Peaks ranked 1..m in lateral order; strips from peak r up to peak r + 1 have rank r.
+    rank = jnp.cumsum(is_peak)
+    count = rank[-1]
+    peak_rank = jnp.where(is_peak, rank, 0)
+    # Strip depths, not parabola peaks: the largest strip depth of a maximum is continuous
+    # when the maximum moves from one strip to the next, the parabola's estimate is not.
+    peak_depth = jax.ops.segment_max(jnp.where(is_peak, inside, _NO_PATCH), peak_rank, num_segments=n + 1)
+    peak_index = jax.ops.segment_max(jnp.where(is_peak, jnp.arange(n), -1), peak_rank, num_segments=n + 1)
+    saddle = jax.ops.segment_min(inside, rank, num_segments=n + 1)  # non-members break the run
+    ranks = jnp.arange(n + 1)
+    saddle = jnp.where((ranks >= 1) & (ranks < count), saddle, _NO_PATCH)  # saddle after peak r
+
+    def cut_toward(s, own, other):
+        excess_own, excess_other = own - s, other - s
+        total = excess_own + excess_other
+        shared = (s > 0.0) & (total > 0.0)
+        return jnp.where(shared, jnp.maximum(s, 0.0) * excess_other / jnp.where(shared, total, 1.0), 0.0)
+
+    next_depth = jnp.concatenate([peak_depth[1:], jnp.full((1,), _NO_PATCH)])
+    previous_depth = jnp.concatenate([jnp.full((1,), _NO_PATCH), peak_depth[:-1]])
+    previous_saddle = jnp.concatenate([jnp.full((1,), _NO_PATCH), saddle[:-1]])
+    cut = jnp.maximum(cut_toward(saddle, peak_depth, next_depth),
+                      cut_toward(previous_saddle, peak_depth, previous_depth))
+    exists = (ranks >= 1) & (ranks <= count)
+    score = jnp.where(exists, peak_depth - cut, 2.0 * _NO_PATCH)
+    _, slots = jax.lax.top_k(score, max_patches)
+    found = exists[slots]
+    slots = slots[jnp.argsort(jnp.where(found, slots, slots + n + 1))]  # lateral order
+    found = exists[slots]
+    # The fraction of its depth a maximum keeps: applied to the refined depth, it leaves
+    # isolated maxima untouched and takes a maximum born from a shoulder from zero.
+    shared = found & (cut[slots] > 0.0)
+    keep = jnp.where(shared, 1.0 - cut[slots] / jnp.where(shared, peak_depth[slots], 1.0), 1.0)
+    return jnp.maximum(peak_index[slots], 0), found, keep
 
 
 def refine_maximum(depth_fn, y_grid: Float[Array, " n"], depth: Float[Array, " n"], index, domain):

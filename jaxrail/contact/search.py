@@ -57,7 +57,9 @@ class ContactPatches(eqx.Module):
 
     Fields:
         active: slot holds a patch.
-        penetration: depth of the contact point into the rail [m], 0 where inactive.
+        penetration: depth of the contact point into the rail [m], less the part shared
+            with a neighbouring maximum of the same run (:func:`find_patches`), 0 where
+            inactive.
         surface: index of the wheel surface of the patch.
         y_wheel: u_w, wheel profile lateral coordinate of the contact point [m].
         s_wheel: s_w, angle on the wheel circle from its lowest point [rad] (eq. 12).
@@ -113,12 +115,12 @@ def _surface_strips(surface, wheel, rail, geometry, config):
 def _surface_patches(surface, surface_index, wheel, rail, geometry, config, slots):
     """Patches of one wheel surface: strips, runs, refinement, contact data."""
     point, y_grid, strips = _surface_strips(surface, wheel, rail, geometry, config)
-    index, active, _ = find_patches(strips.depth, strips.rail_inside > 0.5, slots)
+    index, active, keep = find_patches(strips.depth, strips.rail_inside > 0.5, slots)
     depth_fn = lambda y: point(y).depth  # noqa: E731
     y_star = jax.vmap(lambda i: refine_maximum(depth_fn, y_grid, strips.depth, i, surface.domain))(index)
     _, _, rail_origin, rail_axes, side = geometry
-    return jax.vmap(lambda y, on: _contact_data(surface, surface_index, wheel, rail, point, y, on,
-                                                rail_origin, rail_axes, side))(y_star, active)
+    return jax.vmap(lambda y, on, k: _contact_data(surface, surface_index, wheel, rail, point, y, on, k,
+                                                   rail_origin, rail_axes, side))(y_star, active, keep)
 
 
 def _surface_deepest(surface, wheel, rail, geometry, config):
@@ -131,8 +133,12 @@ def _surface_deepest(surface, wheel, rail, geometry, config):
     return point(y_star).depth, y_star
 
 
-def _contact_data(surface, surface_index, wheel, rail, point, y, active, rail_origin, rail_axes, side):
+def _contact_data(surface, surface_index, wheel, rail, point, y, active, keep, rail_origin, rail_axes,
+                  side):
+    """Contact data of the patch at wheel coordinate ``y``; its penetration is the fraction
+    ``keep`` of the depth there not shared with a neighbouring maximum (:func:`find_patches`)."""
     p = point(y)
+    depth = keep * p.depth
     t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
     f1 = rail.slope(p.y_rail)
     normal = (-side * f1 * n + b) / jnp.sqrt(1.0 + f1 * f1)
@@ -140,10 +146,10 @@ def _contact_data(surface, surface_index, wheel, rail, point, y, active, rail_or
     lateral = jnp.cross(normal, t)
     w1 = surface.slope(y)
     rolling_radius = wheel.nominal_radius + surface.height(y)
-    active = active & (p.depth > 0.0)
+    active = active & (depth > 0.0)
     return dict(
         active=active,
-        penetration=jnp.where(active, p.depth, 0.0),
+        penetration=jnp.where(active, depth, 0.0),
         surface=jnp.asarray(surface_index),
         y_wheel=y,
         s_wheel=p.s_wheel,

@@ -89,11 +89,35 @@ def test_corrected_eq12_and_eq13_with_yaw():
 
 
 def test_lowering_gives_penetration_d_cos_gamma():
-    height = touching_height(0.0)
+    """One patch (left wheel 2 mm toward its flange, away from the two-point contacts
+    at 0 and ~4.7 mm): lowering by d gives the penetration d cos(contact angle)."""
+    height = touching_height(2e-3)
     d = 5e-5
-    out = real_search(0.0, height - d, 0.0, 0.0)
-    gamma = out.contact_angle[:, 0]
-    np.testing.assert_allclose(out.penetration[:, 0], d * np.cos(gamma), rtol=2e-3)
+    out = real_search(2e-3, height - d, 0.0, 0.0)
+    assert list(np.asarray(out.active[0])) == [True, False, False]
+    gamma = out.contact_angle[0, 0]
+    assert float(out.penetration[0, 0]) == pytest.approx(d * np.cos(gamma), rel=2e-3)
+
+
+def test_two_point_contact_hands_over_continuously():
+    """Centred S1002 on UIC60 1:40 is a two-point contact (tread at -7 mm and +3 mm):
+    through it, the deepest point jumps by 10 mm, but the patches share the load, so
+    the total penetration^1.5 changes by O(step): halving the step halves the largest
+    change. Wheelset pressed 50 um into the rails at a fixed height."""
+    height = touching_height(0.0) - 5e-5
+
+    @jax.jit
+    def sweep(laterals):
+        out = jax.vmap(lambda y: real_search(y, height, 0.0, 0.0))(laterals)
+        deepest = jnp.argmax(out.penetration[:, 0], axis=1)
+        y_deepest = jnp.take_along_axis(out.y_wheel[:, 0], deepest[:, None], axis=1)[:, 0]
+        return jnp.sum(out.penetration[:, 0] ** 1.5, axis=1), y_deepest, jnp.sum(out.active[:, 0], axis=1)
+
+    coarse, y_coarse, count = (np.asarray(a) for a in sweep(jnp.linspace(-0.4e-3, 0.4e-3, 41)))
+    fine, _, _ = (np.asarray(a) for a in sweep(jnp.linspace(-0.4e-3, 0.4e-3, 81)))
+    assert np.max(np.abs(np.diff(y_coarse))) > 5e-3  # the deepest point does jump
+    assert count.max() == 2 and count.min() == 1  # a second patch appears on the way
+    assert np.max(np.abs(np.diff(fine))) < 0.6 * np.max(np.abs(np.diff(coarse)))
 
 
 def _weighted_outputs(pose, weights):

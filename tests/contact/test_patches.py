@@ -1,0 +1,113 @@
+"""Patches from strip depths: separate runs, two maxima in one run (conformal two-point
+contact) sharing the interpenetration below their saddle, continuity through the birth
+of a maximum and the hand-over between maxima, jit/vmap/grad."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrail.contact.patches import find_patches
+
+Y = jnp.linspace(-30e-3, 30e-3, 61)  # strips 1 mm apart [m]
+VALID = jnp.ones(61, bool)
+
+
+def bump(centre, height, width):
+    """A parabolic depth cap [m]: height at centre, zero at centre +- width."""
+    return height * (1.0 - ((Y - centre) / width) ** 2)
+
+
+def two_regions(share):
+    """Tread (-12 mm) and flange root (+12 mm) depths of one conformal run: ``share``
+    moves the interpenetration from the first region to the second."""
+    return jnp.maximum(bump(-12e-3, 100e-6 * (1.0 - share), 15e-3),
+                       bump(12e-3, 100e-6 * share, 15e-3)) + 10e-6
+
+
+def effective(depth, slots=3):
+    """Depth kept by each slot's maximum [m], and find_patches' outputs, with the keep
+    fraction turned back into the cut [m] on the strip depth."""
+    index, found, keep = find_patches(depth, VALID, slots)
+    strip_depth = np.asarray(depth)[index]
+    cut = np.where(found, (1.0 - np.asarray(keep)) * strip_depth, 0.0)
+    return np.where(found, np.asarray(keep) * strip_depth, 0.0), index, found, cut
+
+
+def test_separate_runs_are_separate_patches_without_cut():
+    depth = jnp.maximum(bump(-15e-3, 50e-6, 4e-3), bump(10e-3, 80e-6, 4e-3)) - 1e-6
+    eff, index, found, cut = effective(depth)
+    assert list(np.asarray(found)) == [True, True, False]
+    assert [float(Y[i]) for i in index[:2]] == pytest.approx([-15e-3, 10e-3])
+    np.testing.assert_array_equal(np.asarray(cut), 0.0)
+
+
+def test_one_maximum_is_one_patch_at_its_strip():
+    depth = bump(3e-3, 60e-6, 8e-3)
+    eff, index, found, cut = effective(depth)
+    assert list(np.asarray(found)) == [True, False, False]
+    assert float(Y[index[0]]) == pytest.approx(3e-3) and float(cut[0]) == 0.0
+
+
+def test_two_maxima_in_one_run_share_the_saddle_by_hand():
+    depth = two_regions(0.4)
+    eff, index, found, cut = effective(depth)
+    d = np.asarray(depth)
+    d1, d2 = d[index[0]], d[index[1]]
+    s = d[np.argmin(np.where((Y > Y[index[0]]) & (Y < Y[index[1]]), d, np.inf))]
+    assert s > 0.0 and list(np.asarray(found)) == [True, True, False]
+    expected_cut = [s * (d2 - s) / (d1 + d2 - 2 * s), s * (d1 - s) / (d1 + d2 - 2 * s)]
+    np.testing.assert_allclose(cut[:2], expected_cut, rtol=1e-12)
+    # the shared base is split, not counted twice: the cuts add up to the saddle
+    assert float(cut[0] + cut[1]) == pytest.approx(s, rel=1e-12)
+
+
+def test_mirror_symmetric():
+    depth = two_regions(0.3)
+    eff, _, _, _ = effective(depth)
+    eff_mirror, _, _, _ = effective(depth[::-1])
+    np.testing.assert_allclose(np.sort(eff[:2]), np.sort(eff_mirror[:2]), rtol=1e-12)
+
+
+def force_proxy(share):
+    """Sum over patches of depth^1.5, the shape of the Hertz force."""
+    eff, _, found, _ = effective(two_regions(share))
+    return float(np.sum(np.maximum(eff, 0.0) ** 1.5))
+
+
+def largest_jump(samples):
+    values = np.array([force_proxy(s) for s in samples])
+    return np.max(np.abs(np.diff(values)))
+
+
+def test_load_hands_over_continuously_between_the_regions():
+    """Sweeping the interpenetration from the tread region to the flange-root region
+    (a maximum born from a shoulder, then the deepest point changing region): the
+    force proxy changes by O(step), so halving the step halves the largest change.
+    The deepest-point rule alone would jump by the whole depth^1.5 at the crossing."""
+    coarse = largest_jump(np.linspace(0.0, 1.0, 201))
+    fine = largest_jump(np.linspace(0.0, 1.0, 401))
+    assert fine < 0.6 * coarse
+    # what a single deepest point would do at share 0.5: jump to the other region
+    deepest_only = np.array([np.max(np.asarray(two_regions(s))) for s in (0.499, 0.501)])
+    assert coarse < 0.05 * float(deepest_only[0]) ** 1.5
+
+
+def test_jit_vmap_and_finite_gradients():
+    shares = jnp.linspace(0.05, 0.95, 7)
+    batched = jax.jit(jax.vmap(lambda s: find_patches(two_regions(s), VALID, 3)))(shares)
+    for k, s in enumerate(shares):
+        single = find_patches(two_regions(s), VALID, 3)
+        for a, b in zip(single, batched):
+            np.testing.assert_array_equal(np.asarray(a), np.asarray(b[k]))
+
+    def total(share):
+        depth = two_regions(share)
+        index, found, keep = find_patches(depth, VALID, 3)
+        return jnp.sum(jnp.where(found, keep * depth[index] * 1e6, 0.0) ** 1.5)
+
+    for s in (0.2, 0.3, 0.45):  # away from the birth (0) and the crossing (0.5)
+        g = float(jax.grad(total)(s))
+        h = 1e-6
+        fd = (float(total(s + h)) - float(total(s - h))) / (2 * h)
+        assert np.isfinite(g) and g == pytest.approx(fd, rel=1e-4, abs=1e-6)
