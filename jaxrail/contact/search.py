@@ -6,9 +6,9 @@ rail (:mod:`jaxrail.contact.strip`, vmapped), runs of penetrating strips as patc
 and the deepest point of each patch refined below the strip spacing
 (:mod:`jaxrail.contact.patches`). Results come in fixed-size patch slots with a mask.
 
-Wheels whose profile has one surface (real profiles) get ``max_patches`` slots; wheels
-with several surfaces (the paper's simplified profile: tread and flange, each convex)
-get one slot per surface, each surface searched independently.
+Every wheel surface gets ``max_patches`` slots; a wheel with several surfaces (the
+paper's simplified profile: tread and flange) has each surface searched independently
+and its slots in surface order.
 """
 
 import math
@@ -32,7 +32,9 @@ class SearchConfig(eqx.Module):
     Fields:
         strip_spacing: target distance between strips across a wheel surface [m];
             the strip count per surface is ``ceil(width / strip_spacing) + 1``.
-        max_patches: patch slots of a single-surface (real) wheel.
+        max_patches: patch slots per wheel surface. Not one for the simplified profile
+            either: its tread keeps the S1002 hollow, whose two-point contact (tread and
+            the tangent line near the V) needs two slots to hand over load continuously.
     """
 
     strip_spacing: float = eqx.field(static=True, default=1.0e-3)
@@ -46,7 +48,7 @@ class SearchConfig(eqx.Module):
 
     def slots(self, wheel: WheelProfile) -> int:
         """Patch slots per wheel for this wheel profile."""
-        return self.max_patches if len(wheel.surfaces) == 1 else len(wheel.surfaces)
+        return self.max_patches * len(wheel.surfaces)
 
 
 class ContactPatches(eqx.Module):
@@ -200,8 +202,7 @@ def search_wheel(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelse
     s_rail, geometry = _wheel_geometry(track, rail_offset, wheelset_position, wheelset_rotation,
                                        side, s_guess)
     slots = config.slots(wheel)
-    per_surface = slots if len(wheel.surfaces) == 1 else 1
-    parts = [_surface_patches(s, k, wheel, rail, geometry, config, per_surface)
+    parts = [_surface_patches(s, k, wheel, rail, geometry, config, config.max_patches)
              for k, s in enumerate(wheel.surfaces)]
     data = {key: jnp.concatenate([part[key] for part in parts]) for key in parts[0]}
     data["surface"] = data["surface"].astype(jnp.int32)
