@@ -137,6 +137,7 @@ def summarize(result, friction=0.4, flange_angle_threshold=0.6) -> dict:
     normal = np.asarray(w.normal_force, dtype=np.float64)
     angle = np.abs(np.asarray(w.contact_angle, dtype=np.float64))
     flange = np.any(active & (angle > flange_angle_threshold), axis=3)  # (T, W, 2)
+    tread_and_flange = flange & np.any(active & (angle <= flange_angle_threshold), axis=3)
     multi = np.sum(active, axis=3) >= 2
     ratio = derailment_ratio(result)
     n_valid = int(np.sum(valid))
@@ -151,6 +152,7 @@ def summarize(result, friction=0.4, flange_angle_threshold=0.6) -> dict:
                 "max_normal_force_N": peak if peak is not None or not any_valid else 0.0,
                 "max_Y_over_Q": _masked_max(ratio[:, ws, side], np.isfinite(ratio[:, ws, side])),
                 "multi_patch_intervals_s": _runs(t, multi[:, ws, side]),
+                "tread_and_flange_intervals_s": _runs(t, tread_and_flange[:, ws, side]),
                 "flange_contact_fraction": (float(np.sum(flange[:, ws, side])) / n_valid
                                             if any_valid else None),
             })

@@ -145,6 +145,13 @@ def test_multi_patch_intervals_stop_at_the_last_valid_time(summary):
     assert wheel(summary, 2, "left")["multi_patch_intervals_s"] == []
 
 
+def test_tread_and_flange_intervals_need_one_patch_each_side_of_the_threshold(summary):
+    # slot 0 on the tread throughout; slot 1 beyond 0.6 rad at t1, t2, t6 (t4: 0.5 rad)
+    got = wheel(summary, 1, "right")["tread_and_flange_intervals_s"]
+    np.testing.assert_allclose(got, [[0.1, 0.2], [0.6, 0.6]], atol=1e-12)
+    assert wheel(summary, 2, "right")["tread_and_flange_intervals_s"] == []
+
+
 def test_flange_fraction_counts_active_patches_beyond_the_threshold(summary):
     # |angle| > 0.6 at t1, t2 (1.2) and t6 (-0.9), not t4 (0.5): 3 of 7 valid times
     assert wheel(summary, 1, "right")["flange_contact_fraction"] == pytest.approx(3 / 7)
@@ -170,7 +177,8 @@ def test_schema_keys_and_json(summary, tmp_path):
             "nadal_limit", "schema_version"} <= set(summary)
     for w in summary["wheels"]:
         assert set(w) == {"wheelset", "side", "max_normal_force_N", "max_Y_over_Q",
-                          "multi_patch_intervals_s", "flange_contact_fraction"}
+                          "multi_patch_intervals_s", "tread_and_flange_intervals_s",
+                          "flange_contact_fraction"}
     assert set(summary["wheelsets"][0]) == {"wheelset", "max_lateral_displacement_m"}
     text = json.dumps(summary, allow_nan=False)  # raises on NaN or numpy types
     assert json.loads(text) == summary

@@ -39,7 +39,7 @@ def main():
     curve.plot_derailment_ratio(results, FIGURES / "paper_curve_derailment_ratio.png")
     report = {}
     for label, result in results.items():
-        summary = summarize(result)
+        summary = summarize(result)  # friction 0.4, as in the scenarios
         valid = np.asarray(result.valid)
         t = np.asarray(result.t)
         in_curve = valid & (t >= FULL_CURVE[0]) & (t <= FULL_CURVE[1])
@@ -47,12 +47,16 @@ def main():
         angle = np.abs(np.asarray(result.wheels.contact_angle)[:, 0, 1])
         several = active.sum(axis=1) >= 2
         flange = np.any(active & (angle > 0.6), axis=1)
+        tread_and_flange = flange & np.any(active & (angle <= 0.6), axis=1)
         outer = summary["wheels"][1]
         report[label] = {
             "status": summary["status"], "simulated_time_s": summary["simulated_time_s"],
             "outer_wheel_multi_patch_intervals_s": outer["multi_patch_intervals_s"],
             "outer_wheel_multi_patch_fraction_in_full_curve": float(several[in_curve].mean()),
             "outer_wheel_flange_fraction_in_full_curve": float(flange[in_curve].mean()),
+            "outer_wheel_tread_and_flange_intervals_s": outer["tread_and_flange_intervals_s"],
+            "outer_wheel_tread_and_flange_fraction_in_full_curve": float(
+                tread_and_flange[in_curve].mean()),
             "outer_wheel_max_Y_over_Q": outer["max_Y_over_Q"],
             "outer_wheel_max_normal_force_N": outer["max_normal_force_N"],
             "leading_wheelset_max_lateral_m": summary["wheelsets"][0]["max_lateral_displacement_m"],
