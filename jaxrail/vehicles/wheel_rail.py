@@ -74,6 +74,19 @@ class PatchForces(eqx.Module):
     force: Array
 
 
+# Floor on the Hertz curvature ratio B/A at a wheel-rail patch. Where the S1002 throat
+# conforms to the UIC60 gauge corner (contact angles 30-60 degrees with an angle of
+# attack), the lateral relative curvature at the deepest point goes to zero and below,
+# and Hertz would make the patch 50 times wider than long and its stiffness 25 times
+# that of the neighbouring flange-root contact, over 4 mm of profile: in the paper's
+# curve that jump threw the leading wheelset off the rails at 4.4 s. The patch is in
+# fact bounded by the conformal zone (about 9 mm of interpenetration at 0.1 mm, an
+# effective B = depth / half-width^2 of about 5 A). 0.3 lies below every non-conformal
+# contact of S1002 on UIC60 1:40 (smallest B/A 0.35, centred tread at +3 mm; flange
+# root 15-24, flange 100-175: docs/normal-forces.md) and caps the stiffness jump at 3x.
+MIN_CURVATURE_RATIO = 0.3
+
+
 def _cube_root(x):
     positive = x > 0.0
     return jnp.where(positive, jnp.cbrt(jnp.where(positive, x, 1.0)), 0.0)
@@ -83,7 +96,8 @@ def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_ve
     """Forces of one patch slot (scalars); ``patch`` is a ContactPatches entry."""
     G, nu = params.shear_modulus, params.poisson
     radius_x = 1.0 / patch.curvature_wheel_x
-    unit = hertz_from_curvatures(1.0, radius_x, patch.curvature_wheel_y, patch.curvature_rail_y, G, nu)
+    unit = hertz_from_curvatures(1.0, radius_x, patch.curvature_wheel_y, patch.curvature_rail_y, G, nu,
+                                 min_curvature_ratio=MIN_CURVATURE_RATIO)
     stiffness = params.stiffness_scale * unit.stiffness
     wheel_point_velocity = velocity + jnp.cross(angular_velocity, patch.wheel_point - centre)
     rate = -wheel_point_velocity @ patch.normal
