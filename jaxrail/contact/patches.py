@@ -29,15 +29,18 @@ def _parabola_peak(depth):
 
 
 def find_patches(
-    depth: Float[Array, " n"], valid: Bool[Array, " n"], max_patches: int,
-    candidate_depth: float = CANDIDATE_DEPTH,
+    depth: Float[Array, " n"], max_patches: int, candidate_depth: float = CANDIDATE_DEPTH,
 ) -> tuple[Int[Array, " p"], Bool[Array, " p"], Float[Array, " p"]]:
     """Local depth maxima of the (nearly) penetrating strips as patches, deepest first.
 
     A strip is a member when its depth is positive, or when it is a local maximum whose
     parabola through its neighbours peaks above ``-candidate_depth``: a patch narrower
     than the strip spacing (contact onset, the steep flange) is then still found, and
-    the caller decides from the refined depth whether it is in contact.
+    the caller decides from the refined depth whether it is in contact. Every strip can
+    be a member, also one whose rail foot lies beyond the rail domain: its depth is
+    measured to the rail continued along its end tangent (the gauge face, 86 degrees at
+    the UIC60 1:40 gauge-side end), which is continuous, whereas a gate on "foot inside
+    the domain" would change a patch reaching the domain end by a whole strip of depth.
 
     Every local maximum of the depth over the members is a patch. Two maxima in one run
     of members (conformal two-point contact: S1002 tread and flange root on UIC60 near
@@ -52,7 +55,6 @@ def find_patches(
 
     Arguments:
         depth: signed depth of each strip [m] (> 0 penetrating), strips in lateral order.
-        valid: strips whose depth is meaningful (rail foot inside the rail domain).
         max_patches: number of patch slots (static).
         candidate_depth: tolerance [m] on the parabola peak of a local maximum.
 
@@ -62,10 +64,8 @@ def find_patches(
     refined depth by it; 1 for a maximum alone in its run).
     """
     n = depth.shape[0]
-    # Neighbours outside the rail domain still give a continuous depth (to the tangent
-    # at the domain end), good enough for the parabola; only the peak must be valid.
     parabola = _parabola_peak(depth)
-    member = valid & ((depth > 0.0) | (parabola > -candidate_depth))
+    member = (depth > 0.0) | (parabola > -candidate_depth)
     inside = jnp.where(member, depth, _NO_PATCH)
     left = jnp.concatenate([jnp.full((1,), _NO_PATCH), inside[:-1]])
     right = jnp.concatenate([inside[1:], jnp.full((1,), _NO_PATCH)])
@@ -87,7 +87,7 @@ def find_patches(
         excess_own, excess_other = own - s, other - s
         total = excess_own + excess_other
         shared = (s > 0.0) & (total > 0.0)
-        return jnp.where(shared, jnp.maximum(s, 0.0) * excess_other / jnp.where(shared, total, 1.0), 0.0)
+        return jnp.where(shared, s * excess_other / jnp.where(shared, total, 1.0), 0.0)
 
     next_depth = jnp.concatenate([peak_depth[1:], jnp.full((1,), _NO_PATCH)])
     previous_depth = jnp.concatenate([jnp.full((1,), _NO_PATCH), peak_depth[:-1]])
@@ -98,8 +98,8 @@ def find_patches(
     score = jnp.where(exists, peak_depth - cut, 2.0 * _NO_PATCH)
     _, slots = jax.lax.top_k(score, max_patches)
     found = exists[slots]
-    slots = slots[jnp.argsort(jnp.where(found, slots, slots + n + 1))]  # lateral order
-    found = exists[slots]
+    order = jnp.argsort(jnp.where(found, slots, slots + n + 1))  # lateral order, empty last
+    slots, found = slots[order], found[order]
     # The fraction of its depth a maximum keeps: applied to the refined depth, it leaves
     # isolated maxima untouched and takes a maximum born from a shoulder from zero.
     shared = found & (cut[slots] > 0.0)

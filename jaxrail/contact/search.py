@@ -117,12 +117,7 @@ def _surface_strips(surface, wheel, rail, geometry, config):
 def _surface_patches(surface, surface_index, wheel, rail, geometry, config, slots):
     """Patches of one wheel surface: strips, runs, refinement, contact data."""
     point, y_grid, strips = _surface_strips(surface, wheel, rail, geometry, config)
-    # Every strip takes part, also those whose foot lies beyond the rail domain: their
-    # depth is measured to the rail continued along its end tangent (the gauge face,
-    # 86 degrees at the UIC60 1:40 gauge-side end), which is continuous. Gated by "foot
-    # inside the domain", a patch reaching the domain end would change by a whole strip
-    # of depth when the gate switches.
-    index, active, keep = find_patches(strips.depth, jnp.ones(strips.depth.shape, bool), slots)
+    index, active, keep = find_patches(strips.depth, slots)
     depth_fn = lambda y: point(y).depth  # noqa: E731
     y_star = jax.vmap(lambda i: refine_maximum(depth_fn, y_grid, strips.depth, i, surface.domain))(index)
     _, _, rail_origin, rail_axes, side = geometry

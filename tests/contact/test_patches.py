@@ -10,7 +10,6 @@ import pytest
 from jaxrail.contact.patches import find_patches
 
 Y = jnp.linspace(-30e-3, 30e-3, 61)  # strips 1 mm apart [m]
-VALID = jnp.ones(61, bool)
 
 
 def bump(centre, height, width):
@@ -28,7 +27,7 @@ def two_regions(share):
 def effective(depth, slots=3):
     """Depth kept by each slot's maximum [m], and find_patches' outputs, with the keep
     fraction turned back into the cut [m] on the strip depth."""
-    index, found, keep = find_patches(depth, VALID, slots)
+    index, found, keep = find_patches(depth, slots)
     strip_depth = np.asarray(depth)[index]
     cut = np.where(found, (1.0 - np.asarray(keep)) * strip_depth, 0.0)
     return np.where(found, np.asarray(keep) * strip_depth, 0.0), index, found, cut
@@ -36,7 +35,7 @@ def effective(depth, slots=3):
 
 def test_separate_runs_are_separate_patches_without_cut():
     depth = jnp.maximum(bump(-15e-3, 50e-6, 4e-3), bump(10e-3, 80e-6, 4e-3)) - 1e-6
-    eff, index, found, cut = effective(depth)
+    _, index, found, cut = effective(depth)
     assert list(np.asarray(found)) == [True, True, False]
     assert [float(Y[i]) for i in index[:2]] == pytest.approx([-15e-3, 10e-3])
     np.testing.assert_array_equal(np.asarray(cut), 0.0)
@@ -44,14 +43,14 @@ def test_separate_runs_are_separate_patches_without_cut():
 
 def test_one_maximum_is_one_patch_at_its_strip():
     depth = bump(3e-3, 60e-6, 8e-3)
-    eff, index, found, cut = effective(depth)
+    _, index, found, cut = effective(depth)
     assert list(np.asarray(found)) == [True, False, False]
     assert float(Y[index[0]]) == pytest.approx(3e-3) and float(cut[0]) == 0.0
 
 
 def test_two_maxima_in_one_run_share_the_saddle_by_hand():
     depth = two_regions(0.4)
-    eff, index, found, cut = effective(depth)
+    _, index, found, cut = effective(depth)
     d = np.asarray(depth)
     d1, d2 = d[index[0]], d[index[1]]
     s = d[np.argmin(np.where((Y > Y[index[0]]) & (Y < Y[index[1]]), d, np.inf))]
@@ -71,7 +70,7 @@ def test_mirror_symmetric():
 
 def force_proxy(share):
     """Sum over patches of depth^1.5, the shape of the Hertz force."""
-    eff, _, found, _ = effective(two_regions(share))
+    eff, _, _, _ = effective(two_regions(share))
     return float(np.sum(np.maximum(eff, 0.0) ** 1.5))
 
 
@@ -95,15 +94,15 @@ def test_load_hands_over_continuously_between_the_regions():
 
 def test_jit_vmap_and_finite_gradients():
     shares = jnp.linspace(0.05, 0.95, 7)
-    batched = jax.jit(jax.vmap(lambda s: find_patches(two_regions(s), VALID, 3)))(shares)
+    batched = jax.jit(jax.vmap(lambda s: find_patches(two_regions(s), 3)))(shares)
     for k, s in enumerate(shares):
-        single = find_patches(two_regions(s), VALID, 3)
+        single = find_patches(two_regions(s), 3)
         for a, b in zip(single, batched):
             np.testing.assert_array_equal(np.asarray(a), np.asarray(b[k]))
 
     def total(share):
         depth = two_regions(share)
-        index, found, keep = find_patches(depth, VALID, 3)
+        index, found, keep = find_patches(depth, 3)
         return jnp.sum(jnp.where(found, keep * depth[index] * 1e6, 0.0) ** 1.5)
 
     for s in (0.2, 0.3, 0.45):  # away from the birth (0) and the crossing (0.5)
