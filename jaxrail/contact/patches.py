@@ -2,9 +2,11 @@
 
 A patch is a run of adjacent penetrating strips (DESIGN.md §4, step 3), or one of the
 local depth maxima of a run that has several (conformal two-point contact, see
-:func:`find_patches`). Its contact point is the strip of largest penetration, refined
+:func:`find_patches`). Its depth is that of the strip of largest penetration, refined
 below the strip spacing by a parabola through the neighbouring strips and Newton steps
-on ``d depth / d y``, so that contact positions move continuously as the pose changes.
+on ``d depth / d y``. Its contact point is that deepest point for a narrow patch and the
+centre of its interpenetration for a wide one (:func:`overlap_centre`), so that contact
+positions move continuously as the pose changes, also in conformal contact.
 """
 
 import jax
@@ -30,7 +32,7 @@ def _parabola_peak(depth):
 
 def find_patches(
     depth: Float[Array, " n"], max_patches: int, candidate_depth: float = CANDIDATE_DEPTH,
-) -> tuple[Int[Array, " p"], Bool[Array, " p"], Float[Array, " p"]]:
+) -> tuple[Int[Array, " p"], Bool[Array, " p"], Float[Array, " p"], Float[Array, "p n"]]:
     """Local depth maxima of the (nearly) penetrating strips as patches, deepest first.
 
     A strip is a member when its depth is positive, or when it is a local maximum whose
@@ -53,15 +55,25 @@ def find_patches(
     (``d_i = s``) keeps nothing, so patches appear, merge and hand over load
     continuously instead of the contact point jumping between the two regions.
 
+    The interpenetration of every strip is shared out among the maxima the same way
+    (the ``weights``): a strip belongs to the basin of the maximum on its side of the
+    saddle; the part of its depth above the basin's higher saddle ``S`` goes to that
+    maximum, the part below ``S`` is split with the maximum across it in the proportion
+    ``(S - c) / S`` each keeps of the shared layer. The weights of all maxima add up to
+    the positive depth of each strip, and they change continuously through the birth of
+    a maximum and the splitting of a run (the layer that changes hands is then empty).
+
     Arguments:
         depth: signed depth of each strip [m] (> 0 penetrating), strips in lateral order.
         max_patches: number of patch slots (static).
         candidate_depth: tolerance [m] on the parabola peak of a local maximum.
 
-    Returns ``(index, found, keep)``: per slot the strip of one of the ``max_patches``
-    deepest maxima (by depth after the cut; in lateral order, empty slots last),
-    whether the slot holds one, and the fraction of its depth it keeps (multiply the
-    refined depth by it; 1 for a maximum alone in its run).
+    Returns ``(index, found, keep, weights)``: per slot the strip of one of the
+    ``max_patches`` deepest maxima (by depth after the cut; in lateral order, empty
+    slots last), whether the slot holds one, the fraction of its depth it keeps
+    (multiply the refined depth by it; 1 for a maximum alone in its run), and the
+    share [m] of each strip's interpenetration that belongs to it (shape
+    ``(max_patches, n)``, zero for empty slots).
     """
     n = depth.shape[0]
     parabola = _parabola_peak(depth)
@@ -81,7 +93,8 @@ def find_patches(
     peak_index = jax.ops.segment_max(jnp.where(is_peak, jnp.arange(n), -1), peak_rank, num_segments=n + 1)
     saddle = jax.ops.segment_min(inside, rank, num_segments=n + 1)  # non-members break the run
     ranks = jnp.arange(n + 1)
-    saddle = jnp.where((ranks >= 1) & (ranks < count), saddle, _NO_PATCH)  # saddle after peak r
+    between = (ranks >= 1) & (ranks < count)
+    saddle = jnp.where(between, saddle, _NO_PATCH)  # saddle after peak r
 
     def cut_toward(s, own, other):
         excess_own, excess_other = own - s, other - s
@@ -92,8 +105,9 @@ def find_patches(
     next_depth = jnp.concatenate([peak_depth[1:], jnp.full((1,), _NO_PATCH)])
     previous_depth = jnp.concatenate([jnp.full((1,), _NO_PATCH), peak_depth[:-1]])
     previous_saddle = jnp.concatenate([jnp.full((1,), _NO_PATCH), saddle[:-1]])
-    cut = jnp.maximum(cut_toward(saddle, peak_depth, next_depth),
-                      cut_toward(previous_saddle, peak_depth, previous_depth))
+    cut_right = cut_toward(saddle, peak_depth, next_depth)
+    cut_left = cut_toward(previous_saddle, peak_depth, previous_depth)
+    cut = jnp.maximum(cut_right, cut_left)
     exists = (ranks >= 1) & (ranks <= count)
     score = jnp.where(exists, peak_depth - cut, 2.0 * _NO_PATCH)
     _, slots = jax.lax.top_k(score, max_patches)
@@ -104,7 +118,124 @@ def find_patches(
     # isolated maxima untouched and takes a maximum born from a shoulder from zero.
     shared = found & (cut[slots] > 0.0)
     keep = jnp.where(shared, 1.0 - cut[slots] / jnp.where(shared, peak_depth[slots], 1.0), 1.0)
-    return jnp.maximum(peak_index[slots], 0), found, keep
+    weights = _strip_shares(depth, inside, rank, count, saddle, cut_left, cut_right, slots, found)
+    return jnp.maximum(peak_index[slots], 0), found, keep, weights
+
+
+def _strip_shares(depth, inside, rank, count, saddle, cut_left, cut_right, slots, found):
+    """Each slot's share [m] of every strip's positive depth (see :func:`find_patches`)."""
+    n = depth.shape[0]
+    strips = jnp.arange(n)
+    # The saddle strip after each peak (the first strip of its segment at the minimum).
+    at_min = inside == saddle[rank]
+    saddle_index = jax.ops.segment_min(jnp.where(at_min, strips, n), rank, num_segments=n + 1)
+    basin = jnp.clip(rank + (strips > saddle_index[rank]), 1, jnp.maximum(count, 1))
+    level_left = jnp.maximum(jnp.concatenate([jnp.zeros(1), saddle[:-1]]), 0.0)  # before peak r
+    level_right = jnp.maximum(saddle, 0.0)  # after peak r
+    toward_right = level_right >= level_left
+    level = jnp.where(toward_right, level_right, level_left)
+    cut = jnp.where(toward_right, cut_right, cut_left)
+    neighbour = jnp.where(toward_right, jnp.arange(n + 1) + 1, jnp.arange(n + 1) - 1)
+    kept = jnp.where(level > 0.0, (level - cut) / jnp.where(level > 0.0, level, 1.0), 1.0)
+
+    positive = jnp.maximum(depth, 0.0)
+    strip_level = level[basin]
+    above = jnp.maximum(positive - strip_level, 0.0)
+    below = positive - above  # min(depth, level), the layer shared across the saddle
+    own = above + kept[basin] * below
+    given = (1.0 - kept[basin]) * below
+
+    def share(slot):
+        return jnp.where(basin == slot, own, 0.0) + jnp.where(neighbour[basin] == slot, given, 0.0)
+
+    return jnp.where(found[:, None], jax.vmap(share)(slots), 0.0)
+
+
+# A patch whose interpenetration is narrower than WIDE_FROM (its breadth: area over
+# largest depth, 4/3 of the half-width for a parabolic gap) is located at its refined
+# deepest point, one wider than WIDE_FULL at the centre of its interpenetration, with a
+# linear blend between [m]. At the default 1 mm strip spacing the centre is taken only
+# where at least three strips resolve the patch.
+WIDE_FROM, WIDE_FULL = 3.0e-3, 6.0e-3
+
+
+def _segment_moments(weights, depth, y_grid, origin):
+    """Zeroth, first and second moments of a patch's weight density about ``origin``.
+
+    The density is linear between strips; where the signed ``depth`` changes sign
+    between two strips, it falls to zero at the crossing of the linear interpolant, so
+    the moments change continuously as a patch edge passes a strip."""
+    x = y_grid - origin
+    w0, w1, d0, d1 = weights[:-1], weights[1:], depth[:-1], depth[1:]
+    x0, x1 = x[:-1], x[1:]
+    in0, in1 = d0 > 0.0, d1 > 0.0
+    fall = jnp.where(in0 & ~in1, d0 / jnp.where(in0 & ~in1, d0 - d1, 1.0), 1.0)  # share of the segment
+    rise = jnp.where(in1 & ~in0, d1 / jnp.where(in1 & ~in0, d1 - d0, 1.0), 1.0)
+    start = jnp.where(in1 & ~in0, x1 - rise * (x1 - x0), x0)
+    end = jnp.where(in0 & ~in1, x0 + fall * (x1 - x0), x1)
+    a = jnp.where(in0, w0, 0.0)
+    b = jnp.where(in1, w1, 0.0)
+    length = jnp.where(in0 | in1, end - start, 0.0)
+    m0 = length * (a + b) / 2.0
+    m1 = length * (a * (2.0 * start + end) + b * (start + 2.0 * end)) / 6.0
+    m2 = length * (a * (3.0 * start**2 + 2.0 * start * end + end**2)
+                   + b * (start**2 + 2.0 * start * end + 3.0 * end**2)) / 12.0
+    return jnp.sum(m0), jnp.sum(m1), jnp.sum(m2)
+
+
+def overlap_centre(weights: Float[Array, " n"], depth: Float[Array, " n"], y_grid: Float[Array, " n"],
+                   y_deepest):
+    """Contact point and overlap curvature of a patch from its strip weights.
+
+    A wide interpenetration (conformal contact: the S1002 throat against the UIC60 gauge
+    corner overlaps over 8-10 mm at 0.1 mm depth) has a nearly flat top, and its deepest
+    point moves by millimetres, with the contact angle by tens of degrees, for a change of
+    pose of micrometres. Its centre (the centroid of the patch's share of the
+    interpenetration, as in the Kik-Piotrowski method) moves smoothly. Narrow patches,
+    which the strips resolve badly, keep their refined deepest point ``y_deepest``.
+
+    Arguments:
+        weights: the patch's share of each strip's depth [m] (:func:`find_patches`).
+        depth: signed depth of each strip [m]; y_grid: strip coordinates [m].
+        y_deepest: refined deepest point of the patch [m].
+
+    Returns ``(y, blend, curvature)``: the lateral coordinate of the contact point [m],
+    the blend factor from deepest point (0, narrower than ``WIDE_FROM``) to centre
+    (1, wider than ``WIDE_FULL``), and the relative lateral curvature [1/m] a
+    parabolic gap would need to overlap as widely, ``2 delta / w^2`` with the half-width
+    ``w^2 = 5 variance`` of the density and ``delta`` its largest value.
+    """
+    m0, m1, m2 = _segment_moments(weights, depth, y_grid, y_deepest)
+    peak = jnp.max(weights)
+    some = (m0 > 0.0) & (peak > 0.0)
+    safe_m0 = jnp.where(some, m0, 1.0)
+    breadth = jnp.where(some, m0 / jnp.where(some, peak, 1.0), 0.0)
+    blend = jnp.clip((breadth - WIDE_FROM) / (WIDE_FULL - WIDE_FROM), 0.0, 1.0)
+    offset = m1 / safe_m0
+    variance = m2 / safe_m0 - offset**2
+    spread = some & (variance > 0.0)
+    curvature = jnp.where(spread, 0.4 * peak / jnp.where(spread, variance, 1.0), 0.0)
+    return y_deepest + blend * offset, blend, curvature
+
+
+SECANT_SPAN = 1.0e-3  # [m] half-span (arc length) of the secant curvature of a narrow patch
+
+
+def secant_curvature(depth_fn, y, domain, span: float = SECANT_SPAN):
+    """Relative lateral curvature of the gap near ``y`` [1/m along the wheel coordinate],
+    ``-d''`` from the depth at three points ``span`` apart around ``y``, the stencil
+    shifted (and, on a surface narrower than ``2 span``, shrunk) to stay in ``domain``.
+
+    For a narrow patch this replaces the sum of the two profile curvatures at one point.
+    The UIC60 head is made of arcs (R300, R80, R13) whose curvatures jump at the
+    junctions: a contact point crossing one changed the Hertz stiffness by a factor 2.5
+    at once. The depth is continuously differentiable there, and its second difference
+    over the span changes continuously instead, spreading the jump over 2 ``span``."""
+    half_width = 0.5 * (domain[1] - domain[0])
+    span = jnp.minimum(span, 0.5 * half_width)
+    centre = jnp.clip(y, domain[0] + span, domain[1] - span)
+    d_below, d_mid, d_above = jax.vmap(depth_fn)(centre + span * jnp.array([-1.0, 0.0, 1.0]))
+    return -(d_above - 2.0 * d_mid + d_below) / span**2
 
 
 def refine_maximum(depth_fn, y_grid: Float[Array, " n"], depth: Float[Array, " n"], index, domain):

@@ -3,8 +3,9 @@
 Per wheel (DESIGN.md §4): the rail section nearest the wheel profile origin (eqs. 3-5),
 every strip of a fixed grid across each wheel surface against that locally straight
 rail (:mod:`jaxrail.contact.strip`, vmapped), runs of penetrating strips as patches,
-and the deepest point of each patch refined below the strip spacing
-(:mod:`jaxrail.contact.patches`). Results come in fixed-size patch slots with a mask.
+the deepest point of each patch refined below the strip spacing, and a wide patch
+placed at the centre of its interpenetration (:mod:`jaxrail.contact.patches`). Results
+come in fixed-size patch slots with a mask.
 
 Every wheel surface gets ``max_patches`` slots; a wheel with several surfaces (the
 paper's simplified profile: tread and flange) has each surface searched independently
@@ -20,7 +21,7 @@ from jaxtyping import Array, Bool, Float, Int
 
 from ..profiles._base import Profile, WheelProfile
 from ..track import project, rail_frame
-from .patches import find_patches, refine_maximum
+from .patches import SECANT_SPAN, find_patches, overlap_centre, refine_maximum, secant_curvature
 from .strip import strip_point, wheel_frame
 
 HALF_TAPING_DISTANCE = 0.75  # [m] taping lines 1500 mm apart (back-to-back 1360 mm)
@@ -59,11 +60,13 @@ class ContactPatches(eqx.Module):
 
     Fields:
         active: slot holds a patch.
-        penetration: depth of the contact point into the rail [m], less the part shared
-            with a neighbouring maximum of the same run (:func:`find_patches`), 0 where
-            inactive.
+        penetration: refined largest depth of the patch into the rail [m], less the part
+            shared with a neighbouring maximum of the same run (:func:`find_patches`), 0
+            where inactive.
         surface: index of the wheel surface of the patch.
-        y_wheel: u_w, wheel profile lateral coordinate of the contact point [m].
+        y_wheel: u_w, wheel profile lateral coordinate of the contact point [m]: the
+            deepest point of a narrow patch, the centre of the interpenetration of a
+            wide one (:func:`jaxrail.contact.patches.overlap_centre`).
         s_wheel: s_w, angle on the wheel circle from its lowest point [rad] (eq. 12).
         dx: longitudinal offset of the contact point from the rail section [m] (eq. 13).
         y_rail: u_r, rail profile lateral coordinate [m] (eq. 15).
@@ -80,6 +83,13 @@ class ContactPatches(eqx.Module):
             ``cos(wheel profile angle) / rolling_radius`` [1/m].
         curvature_wheel_y, curvature_rail_y: lateral profile curvatures [1/m], convex
             toward the other body positive (the S1002 throat is negative).
+        curvature_contact_y: relative lateral curvature of the patch [1/m] for Hertz
+            (the sum of wheel and rail curvature where those are smooth): for a narrow
+            patch the secant curvature of the gap over +-1 mm
+            (:func:`jaxrail.contact.patches.secant_curvature`), continuous across the
+            arc junctions of the UIC60 head; for a wide one the curvature a parabolic gap
+            would need to overlap as widely (:func:`jaxrail.contact.patches.overlap_centre`),
+            which stays positive and representative where the profiles conform.
     """
 
     active: Bool[Array, "... p"]
@@ -100,6 +110,7 @@ class ContactPatches(eqx.Module):
     curvature_wheel_x: Float[Array, "... p"]
     curvature_wheel_y: Float[Array, "... p"]
     curvature_rail_y: Float[Array, "... p"]
+    curvature_contact_y: Float[Array, "... p"]
 
 
 def _surface_strips(surface, wheel, rail, geometry, config):
@@ -117,12 +128,20 @@ def _surface_strips(surface, wheel, rail, geometry, config):
 def _surface_patches(surface, surface_index, wheel, rail, geometry, config, slots):
     """Patches of one wheel surface: strips, runs, refinement, contact data."""
     point, y_grid, strips = _surface_strips(surface, wheel, rail, geometry, config)
-    index, active, keep = find_patches(strips.depth, slots)
+    index, active, keep, weights = find_patches(strips.depth, slots)
     depth_fn = lambda y: point(y).depth  # noqa: E731
     y_star = jax.vmap(lambda i: refine_maximum(depth_fn, y_grid, strips.depth, i, surface.domain))(index)
+    y_contact, blend, overlap = jax.vmap(lambda w, y: overlap_centre(w, strips.depth, y_grid, y))(
+        weights, y_star)
+    depth = keep * jax.vmap(depth_fn)(y_star)
+    stretch = 1.0 + jax.vmap(surface.slope)(y_star) ** 2  # (arc length / wheel coordinate)^2
+    secant = jax.vmap(lambda y, k: secant_curvature(depth_fn, y, surface.domain, SECANT_SPAN / jnp.sqrt(k)))(
+        y_star, stretch)
+    narrow = secant / stretch
     _, _, rail_origin, rail_axes, side = geometry
-    return jax.vmap(lambda y, on, k: _contact_data(surface, surface_index, wheel, rail, point, y, on, k,
-                                                   rail_origin, rail_axes, side))(y_star, active, keep)
+    data = lambda *args: _contact_data(surface, surface_index, wheel, rail, point, *args,  # noqa: E731
+                                       rail_origin, rail_axes, side)
+    return jax.vmap(data)(y_contact, active, depth, narrow + blend * (overlap - narrow))
 
 
 def _surface_deepest(surface, wheel, rail, geometry, config):
@@ -135,12 +154,11 @@ def _surface_deepest(surface, wheel, rail, geometry, config):
     return point(y_star).depth, y_star
 
 
-def _contact_data(surface, surface_index, wheel, rail, point, y, active, keep, rail_origin, rail_axes,
-                  side):
-    """Contact data of the patch at wheel coordinate ``y``; its penetration is the fraction
-    ``keep`` of the depth there not shared with a neighbouring maximum (:func:`find_patches`)."""
+def _contact_data(surface, surface_index, wheel, rail, point, y, active, depth, curvature,
+                  rail_origin, rail_axes, side):
+    """Contact data of the patch with contact point at wheel coordinate ``y``, penetration
+    ``depth`` [m] and relative lateral curvature ``curvature`` [1/m]."""
     p = point(y)
-    depth = keep * p.depth
     t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
     f1 = rail.slope(p.y_rail)
     normal = (-side * f1 * n + b) / jnp.sqrt(1.0 + f1 * f1)
@@ -166,6 +184,7 @@ def _contact_data(surface, surface_index, wheel, rail, point, y, active, keep, r
         curvature_wheel_x=1.0 / (jnp.sqrt(1.0 + w1 * w1) * rolling_radius),
         curvature_wheel_y=-surface.second_derivative(y) / (1.0 + w1 * w1) ** 1.5,
         curvature_rail_y=-rail.second_derivative(p.y_rail) / (1.0 + f1 * f1) ** 1.5,
+        curvature_contact_y=curvature,
     )
 
 

@@ -74,16 +74,15 @@ class PatchForces(eqx.Module):
     force: Array
 
 
-# Floor on the Hertz curvature ratio B/A at a wheel-rail patch. Where the S1002 throat
-# conforms to the UIC60 gauge corner (contact angles 30-60 degrees with an angle of
-# attack), the lateral relative curvature at the deepest point goes to zero and below,
-# and Hertz would make the patch 50 times wider than long and its stiffness 25 times
-# that of the neighbouring flange-root contact, over 4 mm of profile: in the paper's
-# curve that jump threw the leading wheelset off the rails at 4.4 s. The patch is in
-# fact bounded by the conformal zone (about 9 mm of interpenetration at 0.1 mm, an
-# effective B = depth / half-width^2 of about 5 A). 0.3 lies below every non-conformal
-# contact of S1002 on UIC60 1:40 (smallest B/A 0.35, centred tread at +3 mm; flange
-# root 15-24, flange 100-175: docs/normal-forces.md) and caps the stiffness jump at 3x.
+# Floor on the Hertz curvature ratio B/A at a wheel-rail patch, a guard. The lateral
+# curvature sum is the patch's ``curvature_contact_y``: the profile curvatures at the
+# point for narrow patches, the overlap curvature for wide ones, which stays positive
+# where the S1002 throat conforms to the UIC60 gauge corner (with the profile curvatures
+# there and a 1e-3 floor, the stiffness jumped 25-fold over 4 mm of profile and threw the
+# leading wheelset off the rails in the paper's curve). The floor catches narrow
+# patches on concave parts of the S1002 tread (profile B/A down to -0.6 at -8 mm) and
+# small patches sharing a run; 0.3 lies below the flange root (15) and flange
+# (100-175): docs/normal-forces.md.
 MIN_CURVATURE_RATIO = 0.3
 
 
@@ -96,7 +95,7 @@ def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_ve
     """Forces of one patch slot (scalars); ``patch`` is a ContactPatches entry."""
     G, nu = params.shear_modulus, params.poisson
     radius_x = 1.0 / patch.curvature_wheel_x
-    unit = hertz_from_curvatures(1.0, radius_x, patch.curvature_wheel_y, patch.curvature_rail_y, G, nu,
+    unit = hertz_from_curvatures(1.0, radius_x, patch.curvature_contact_y, 0.0, G, nu,
                                  min_curvature_ratio=MIN_CURVATURE_RATIO)
     stiffness = params.stiffness_scale * unit.stiffness
     wheel_point_velocity = velocity + jnp.cross(angular_velocity, patch.wheel_point - centre)

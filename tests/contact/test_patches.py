@@ -1,13 +1,14 @@
 """Patches from strip depths: separate runs, two maxima in one run (conformal two-point
 contact) sharing the interpenetration below their saddle, continuity through the birth
-of a maximum and the hand-over between maxima, jit/vmap/grad."""
+of a maximum and the hand-over between maxima, the strip weights and the centre of a
+wide patch, jit/vmap/grad."""
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrail.contact.patches import find_patches
+from jaxrail.contact.patches import find_patches, overlap_centre
 
 Y = jnp.linspace(-30e-3, 30e-3, 61)  # strips 1 mm apart [m]
 
@@ -27,7 +28,7 @@ def two_regions(share):
 def effective(depth, slots=3):
     """Depth kept by each slot's maximum [m], and find_patches' outputs, with the keep
     fraction turned back into the cut [m] on the strip depth."""
-    index, found, keep = find_patches(depth, slots)
+    index, found, keep, _ = find_patches(depth, slots)
     strip_depth = np.asarray(depth)[index]
     cut = np.where(found, (1.0 - np.asarray(keep)) * strip_depth, 0.0)
     return np.where(found, np.asarray(keep) * strip_depth, 0.0), index, found, cut
@@ -98,11 +99,11 @@ def test_jit_vmap_and_finite_gradients():
     for k, s in enumerate(shares):
         single = find_patches(two_regions(s), 3)
         for a, b in zip(single, batched):
-            np.testing.assert_array_equal(np.asarray(a), np.asarray(b[k]))
+            np.testing.assert_allclose(np.asarray(a), np.asarray(b[k]), rtol=1e-12, atol=1e-20)
 
     def total(share):
         depth = two_regions(share)
-        index, found, keep = find_patches(depth, 3)
+        index, found, keep, _ = find_patches(depth, 3)
         return jnp.sum(jnp.where(found, keep * depth[index] * 1e6, 0.0) ** 1.5)
 
     for s in (0.2, 0.3, 0.45):  # away from the birth (0) and the crossing (0.5)
@@ -110,3 +111,61 @@ def test_jit_vmap_and_finite_gradients():
         h = 1e-6
         fd = (float(total(s + h)) - float(total(s - h))) / (2 * h)
         assert np.isfinite(g) and g == pytest.approx(fd, rel=1e-4, abs=1e-6)
+
+
+@pytest.mark.parametrize("depth", [two_regions(0.4), two_regions(0.02),
+                                   jnp.maximum(bump(-15e-3, 50e-6, 4e-3), bump(10e-3, 80e-6, 4e-3))])
+def test_weights_share_out_each_strips_depth(depth):
+    """Every strip's positive depth is shared out among the patches, none counted twice,
+    and each maximum's own strip carries the depth it keeps."""
+    index, found, keep, weights = find_patches(depth, 3)
+    np.testing.assert_allclose(np.sum(weights, axis=0), np.maximum(depth, 0.0), atol=1e-18)
+    assert np.all(np.asarray(weights) >= 0.0)
+    on = np.asarray(found)
+    peak = np.asarray(weights)[np.arange(3), np.asarray(index)]
+    np.testing.assert_allclose(peak[on], (np.asarray(keep) * np.asarray(depth)[index])[on], rtol=1e-12)
+
+
+def test_weights_change_continuously_through_birth_and_hand_over():
+    """Sweeping the two-region run from just after the birth of the second maximum
+    through the crossing: each patch's share (its area ``m`` and centre ``c``) changes by
+    O(step), so halving the step halves the largest change of the slot-order-free sums
+    of ``m^1.5`` and ``m^1.5 c``. Assigning whole strips to the deepest maximum instead
+    would move the strips beyond the saddle from one patch to the other at once."""
+    def largest_change(count):
+        def moments(share):
+            weights = find_patches(two_regions(share), 3)[3]
+            area = jnp.sum(weights, axis=1)
+            centre = jnp.sum(weights * Y, axis=1) / jnp.where(area > 0.0, area, 1.0)
+            return jnp.array([jnp.sum(area**1.5), jnp.sum(area**1.5 * centre)])
+
+        values = jax.vmap(moments)(jnp.linspace(0.002, 0.9, count))
+        return np.max(np.abs(np.diff(np.asarray(values), axis=0)), axis=0)
+
+    coarse, fine = largest_change(101), largest_change(201)
+    assert np.all(fine < 0.6 * coarse)
+
+
+def test_centre_of_a_wide_parabolic_patch():
+    """A parabolic overlap 2 w = 16 mm wide and 80 um deep off the strip grid: its
+    centre is the vertex, its overlap curvature 2 delta / w^2, and it is far from the
+    deepest-point estimate passed in (the blend is 1)."""
+    depth = bump(3.3e-3, 80e-6, 8e-3)
+    _, found, _, weights = find_patches(depth, 1)
+    y, blend, curvature = overlap_centre(weights[0], depth, Y, 0.0)
+    assert bool(found[0]) and float(blend) == 1.0
+    assert float(y) == pytest.approx(3.3e-3, abs=1e-6)
+    assert float(curvature) == pytest.approx(2 * 80e-6 / 8e-3**2, rel=0.02)
+
+
+def test_narrow_patch_keeps_its_deepest_point():
+    """A patch narrower than WIDE_FROM (here one strip) is located at the refined
+    deepest point given; blending in the centre is continuous in its breadth."""
+    depth = bump(0.2e-3, 20e-6, 1.2e-3)
+    _, _, _, weights = find_patches(depth, 1)
+    y, blend, _ = overlap_centre(weights[0], depth, Y, 0.2e-3)
+    assert float(blend) == 0.0 and float(y) == 0.2e-3
+    widths = np.linspace(2e-3, 6e-3, 81)  # through the whole blend
+    centres = np.array([float(overlap_centre(*(lambda d: (find_patches(d, 1)[3][0], d))(bump(0.3e-3, 50e-6, w)),
+                                             Y, 0.3e-3)[0]) for w in widths])
+    assert np.max(np.abs(np.diff(centres))) < 2e-6

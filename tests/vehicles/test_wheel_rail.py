@@ -11,6 +11,7 @@ from jaxrail.profiles import rail_offset, s1002, uic60
 from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.track import straight_track
 from jaxrail.vehicles import ContactParameters, wheelset_contact_loads
+from jaxrail.vehicles.wheel_rail import MIN_CURVATURE_RATIO
 
 WHEEL, RAIL, TRACK = s1002(), uic60(), straight_track(20.0)
 OFFSET = rail_offset(RAIL)
@@ -38,7 +39,7 @@ def test_static_normal_force_is_hertz():
     np.testing.assert_allclose(n, forces.stiffness[on] * delta**1.5, rtol=1e-12)
     # Independent: the Hertz approach for that load equals the penetration.
     a_sum = 0.5 * patches.curvature_wheel_x[on]
-    b_sum = 0.5 * (patches.curvature_wheel_y[on] + patches.curvature_rail_y[on])
+    b_sum = np.maximum(0.5 * patches.curvature_contact_y[on], MIN_CURVATURE_RATIO * a_sum)
     approach = hertz(n, a_sum, b_sum, 8.2e10, 0.28).approach
     np.testing.assert_allclose(approach, delta, rtol=1e-9)
     vertical = np.sum(np.asarray(forces.normal_force)[on] * np.asarray(patches.normal)[on][:, 2])
@@ -53,13 +54,16 @@ def test_lateral_creep_force_opposes_lateral_slip_with_kalker_slope():
     each wheel's lateral creep force opposes the slip and equals Kalker's linear law
     -G a b c22 eta."""
     cylinder = conical_wheel(0.0)
-    position, rotation = wheelset_pose(TRACK, 10.0, 0.0, 0.46 - 5e-5, 0.0, 0.0)
+    # About 5 um into the crown: a patch narrower than WIDE_FROM, at the deepest point.
+    position, rotation = wheelset_pose(TRACK, 10.0, 0.0, 0.46 + 8.9e-5, 0.0, 0.0)
     slip = 1e-5 * SPEED
     run = jax.jit(wheelset_contact_loads)
     params = ContactParameters(normal_law=Hertz())
     args = (cylinder, RAIL, TRACK, OFFSET, params, position, rotation, jnp.array([SPEED, slip, 0.0]))
-    depth = float(run(*args, SPEED / 0.46 * rotation[:, 1])[2].penetration[0, 0])
-    # Roll freely: the interface (half the overlap below the wheel surface) has no slip.
+    patch = run(*args, SPEED / 0.46 * rotation[:, 1])[2]
+    depth = float(jnp.linalg.norm(patch.wheel_point[0, 0] - patch.rail_point[0, 0]))
+    # Roll freely: the interface (half the overlap at the contact point below the wheel
+    # surface) has no slip.
     _, _, patches, forces = run(*args, SPEED / (0.46 - 0.5 * depth) * rotation[:, 1])
     assert np.asarray(patches.active[:, 0]).all()
     np.testing.assert_allclose(forces.creepage_x[:, 0], 0.0, atol=1e-9)
