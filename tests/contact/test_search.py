@@ -37,16 +37,25 @@ def touching_height(lateral, roll=0.0, yaw=0.0):
     return hi
 
 
+CONE, HEAD = 0.05, 0.3  # cone slope [-] and head radius [m] of the analytic case
+CONE_POINT = -HEAD * np.sin(CONE)  # u_r = u_w of the tangent point [m]
+
+
+def coned_wheel_on_circular_head(lowered):
+    """Both wheels of a coned wheelset lowered by ``lowered`` [m] from touching a
+    circular head: the contact patches."""
+    wheel, rail = conical_wheel(CONE), CircularProfile(HEAD, half_width=0.03)
+    touching = 0.46 + np.tan(CONE) * HEAD * np.sin(CONE) - HEAD * (1.0 - np.cos(CONE))
+    position, rotation = wheelset_pose(TRACK, STATION, 0.0, touching - lowered, 0.0, 0.0)
+    return jax.jit(search_wheelset)(wheel, rail, TRACK, 0.75, position, rotation, SearchConfig(), STATION)
+
+
 def test_coned_wheel_on_circular_head_analytic():
     """Cone angle g on a circular head of radius R: the contact lies where the head's
     slope equals the cone's, u_r = -R sin(g), with contact angle g; lowering the
     wheelset by d from touching gives the normal penetration d cos(g) exactly."""
-    cone, head, lowered = 0.05, 0.3, 1e-6
-    wheel, rail = conical_wheel(cone), CircularProfile(head, half_width=0.03)
-    u = -head * np.sin(cone)
-    touching = 0.46 + np.tan(cone) * head * np.sin(cone) - head * (1.0 - np.cos(cone))
-    position, rotation = wheelset_pose(TRACK, STATION, 0.0, touching - lowered, 0.0, 0.0)
-    out = jax.jit(search_wheelset)(wheel, rail, TRACK, 0.75, position, rotation, SearchConfig(), STATION)
+    cone, head, u, lowered = CONE, HEAD, CONE_POINT, 1e-6
+    out = coned_wheel_on_circular_head(lowered)
     assert out.active[:, 0].tolist() == [True, True]
     assert not bool(jnp.any(out.active[:, 1:]))
     np.testing.assert_allclose(out.penetration[:, 0], lowered * np.cos(cone), rtol=1e-7)
@@ -67,15 +76,10 @@ def test_wide_patch_on_circular_head_acts_at_its_centre():
     symmetric about the tangent point, whose centre is that point and whose overlap
     curvature is the head's 1/R (the gap is a circle, nearly a parabola). The centre is
     integrated piecewise linearly between strips 1 mm apart: within 0.01 mm."""
-    cone, head, lowered = 0.05, 0.3, 1e-4
-    wheel, rail = conical_wheel(cone), CircularProfile(head, half_width=0.03)
-    u = -head * np.sin(cone)
-    touching = 0.46 + np.tan(cone) * head * np.sin(cone) - head * (1.0 - np.cos(cone))
-    position, rotation = wheelset_pose(TRACK, STATION, 0.0, touching - lowered, 0.0, 0.0)
-    out = jax.jit(search_wheelset)(wheel, rail, TRACK, 0.75, position, rotation, SearchConfig(), STATION)
-    np.testing.assert_allclose(out.penetration[:, 0], lowered * np.cos(cone), rtol=1e-6)
-    np.testing.assert_allclose(out.y_wheel[:, 0], u, atol=1e-5)
-    np.testing.assert_allclose(out.curvature_contact_y[:, 0], 1.0 / head, rtol=0.02)
+    out = coned_wheel_on_circular_head(1e-4)
+    np.testing.assert_allclose(out.penetration[:, 0], 1e-4 * np.cos(CONE), rtol=1e-6)
+    np.testing.assert_allclose(out.y_wheel[:, 0], CONE_POINT, atol=1e-5)
+    np.testing.assert_allclose(out.curvature_contact_y[:, 0], 1.0 / HEAD, rtol=0.02)
 
 
 def test_corrected_eq12_and_eq13_with_yaw():
