@@ -62,6 +62,13 @@ def main():
             "leading_wheelset_max_lateral_m": summary["wheelsets"][0]["max_lateral_displacement_m"],
             "mean_leading_lateral_in_full_curve_mm": float(
                 1e3 * np.mean(np.asarray(result.wheelset_lateral)[in_curve, 0])),
+            # steadiness: a chattering wheelset scatters and loses its outer wheel's contact
+            "std_leading_lateral_in_full_curve_mm": float(
+                1e3 * np.std(np.asarray(result.wheelset_lateral)[in_curve, 0])),
+            "outer_wheel_unloaded_fraction_in_full_curve": float((~active.any(axis=1))[in_curve].mean()),
+            "outer_wheel_contact_angle_deg_5_50_95_percent_in_full_curve": [
+                round(float(v), 1) for v in np.percentile(
+                    np.degrees(angle[in_curve][active[in_curve]]), [5, 50, 95])],
             "y_wheel_of_outer_patches_in_full_curve_mm": sorted({
                 round(float(1e3 * y), 1) for y in np.asarray(
                     result.wheels.y_wheel)[:, 0, 1][in_curve & valid][active[in_curve & valid]]
