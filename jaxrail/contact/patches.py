@@ -93,8 +93,7 @@ def find_patches(
     peak_index = jax.ops.segment_max(jnp.where(is_peak, jnp.arange(n), -1), peak_rank, num_segments=n + 1)
     saddle = jax.ops.segment_min(inside, rank, num_segments=n + 1)  # non-members break the run
     ranks = jnp.arange(n + 1)
-    between = (ranks >= 1) & (ranks < count)
-    saddle = jnp.where(between, saddle, _NO_PATCH)  # saddle after peak r
+    saddle = jnp.where((ranks >= 1) & (ranks < count), saddle, _NO_PATCH)  # saddle after peak r
 
     def cut_toward(s, own, other):
         excess_own, excess_other = own - s, other - s

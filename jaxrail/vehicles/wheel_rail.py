@@ -75,14 +75,14 @@ class PatchForces(eqx.Module):
 
 
 # Floor on the Hertz curvature ratio B/A at a wheel-rail patch, a guard. The lateral
-# curvature sum is the patch's ``curvature_contact_y``: the profile curvatures at the
-# point for narrow patches, the overlap curvature for wide ones, which stays positive
+# curvature sum is the patch's ``curvature_contact_y``: the gap's secant curvature over
+# +-1 mm for narrow patches, the overlap curvature for wide ones, which stays positive
 # where the S1002 throat conforms to the UIC60 gauge corner (with the profile curvatures
 # there and a 1e-3 floor, the stiffness jumped 25-fold over 4 mm of profile and threw the
 # leading wheelset off the rails in the paper's curve). The floor catches narrow
-# patches on concave parts of the S1002 tread (profile B/A down to -0.6 at -8 mm) and
-# small patches sharing a run; 0.3 lies below the flange root (15) and flange
-# (100-175): docs/normal-forces.md.
+# patches where the gap is concave (small second patches sharing a run on the S1002
+# tread, B/A 0.02-0.6); 0.3 lies below the flange root (15) and flange (106-133):
+# docs/normal-forces.md.
 MIN_CURVATURE_RATIO = 0.3
 
 
