@@ -1,6 +1,7 @@
-"""Vehicles: wheel-rail coupling of wheelsets, the paper's 11-body trailer, a single
-free wheelset, and their initial static equilibrium."""
+"""Vehicles: wheel-rail coupling of wheelsets, the paper's 11-body trailer, a loaded
+bogie (half of it), a single free wheelset, and their initial static equilibrium."""
 
+from .bogie import bogie as bogie
 from .initial import initial_state as initial_state
 from .initial import wheelset_rest_pose as wheelset_rest_pose
 from .single_wheelset import simulate_single_wheelset as simulate_single_wheelset

@@ -109,6 +109,40 @@ def _inertia(values, group, names=("roll_inertia", "pitch_inertia", "yaw_inertia
     return tuple(values[f"{group}.{n}"] for n in names)
 
 
+def unsprung_bodies(values: dict, axle_x) -> tuple[list, list, list]:
+    """Axlebox bodies ``axlebox_k`` and wheelsets ``wheelset_k`` (k = 1, 2, ... in the
+    order of ``axle_x`` [m], vehicle frame), their layout rows and the revolute joints
+    ``axle_k`` that join each axlebox body to its wheelset about the axle."""
+    v, r0 = values, values["wheelset.nominal_radius"]
+    bodies = [RigidBody(f"axlebox_{k}", v["axlebox.mass"], _inertia(v, "axlebox"))
+              for k in range(1, len(axle_x) + 1)]
+    bodies += [RigidBody(f"wheelset_{k}", v["wheelset.mass"],
+                         _inertia(v, "wheelset", ("roll_inertia", "spin_inertia",
+                                                  "yaw_inertia")))
+               for k in range(1, len(axle_x) + 1)]
+    layout = [(x, 0.0, r0) for x in axle_x] * 2
+    joints = [Revolute(f"axlebox_{k}", f"wheelset_{k}", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0),
+                       axis_i=(0.0, 1.0, 0.0), axis_j=(0.0, 1.0, 0.0), name=f"axle_{k}")
+              for k in range(1, len(axle_x) + 1)]
+    return bodies, layout, joints
+
+
+def primary_bushings(values: dict, k: int, frame: str, x: float, preload: float) -> list:
+    """The two primary bushings ``primary_k_left``/``_right`` between ``axlebox_k`` and
+    the bogie frame body ``frame``; the axle is ``x`` [m] ahead of the frame's centre of
+    mass, which is at the height ``bogie.height``. Each carries the vertical ``preload`` [N] at zero
+    deflection (compressed: pushes the frame up)."""
+    v, p = values, "primary."
+    stiffness = (v[p + "longitudinal_stiffness"], v[p + "lateral_stiffness"],
+                 v[p + "vertical_stiffness"], 0.0, v[p + "pitch_stiffness"], 0.0)
+    damping = (0.0, 0.0, v[p + "vertical_damping"], 0.0, v[p + "pitch_damping"], 0.0)
+    half, dz = v["axlebox.half_span"], v["wheelset.nominal_radius"] - v["bogie.height"]
+    return [Bushing(f"axlebox_{k}", frame, (0.0, y, 0.0), (x, y, dz), stiffness=stiffness,
+                    damping=damping, preload=(0.0, 0.0, -preload, 0.0, 0.0, 0.0),
+                    name=f"primary_{k}_{side}")
+            for side, y in (("left", half), ("right", -half))]
+
+
 def trailer(wheel=None, rail=None, values=None, config=SearchConfig(),
             contact=ContactParameters()) -> tuple[Vehicle, VehicleParams]:
     """The 11-body trailer as ``(Vehicle, VehicleParams)``.
@@ -132,24 +166,10 @@ def trailer(wheel=None, rail=None, values=None, config=SearchConfig(),
     for k, x in enumerate(bogie_x, 1):
         bodies.append(RigidBody(f"bogie_{k}", v["bogie.mass"], _inertia(v, "bogie")))
         layout.append((x, 0.0, v["bogie.height"]))
-    for k, x in enumerate(axle_x, 1):
-        bodies.append(RigidBody(f"axlebox_{k}", v["axlebox.mass"], _inertia(v, "axlebox")))
-        layout.append((x, 0.0, r0))
-    for k, x in enumerate(axle_x, 1):
-        bodies.append(RigidBody(f"wheelset_{k}", v["wheelset.mass"],
-                                _inertia(v, "wheelset", ("roll_inertia", "spin_inertia",
-                                                          "yaw_inertia"))))
-        layout.append((x, 0.0, r0))
+    unsprung, unsprung_layout, joints = unsprung_bodies(v, axle_x)
+    bodies += unsprung
+    layout += unsprung_layout
 
-    joints = [Revolute(f"axlebox_{k}", f"wheelset_{k}", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0),
-                       axis_i=(0.0, 1.0, 0.0), axis_j=(0.0, 1.0, 0.0), name=f"axle_{k}")
-              for k in range(1, 5)]
-
-    p = "primary."
-    primary_k = (v[p + "longitudinal_stiffness"], v[p + "lateral_stiffness"],
-                 v[p + "vertical_stiffness"], 0.0, v[p + "pitch_stiffness"], 0.0)
-    primary_c = (0.0, 0.0, v[p + "vertical_damping"], 0.0, v[p + "pitch_damping"], 0.0)
-    primary_f0 = (0.0, 0.0, -loads["primary"], 0.0, 0.0, 0.0)  # compressed: pushes up
     s = "secondary."
     secondary_k = (v[s + "longitudinal_stiffness"], v[s + "lateral_stiffness"],
                    v[s + "vertical_stiffness"], 0.0, 0.0, 0.0)
@@ -157,15 +177,10 @@ def trailer(wheel=None, rail=None, values=None, config=SearchConfig(),
     secondary_f0 = (0.0, 0.0, -loads["secondary"], 0.0, 0.0, 0.0)
 
     forces = []
-    half = v["axlebox.half_span"]
     for k, x in enumerate(axle_x, 1):
         bogie = 1 if k <= 2 else 2
-        for side, y in (("left", half), ("right", -half)):
-            forces.append(Bushing(
-                f"axlebox_{k}", f"bogie_{bogie}", (0.0, y, 0.0),
-                (x - bogie_x[bogie - 1], y, r0 - v["bogie.height"]),
-                stiffness=primary_k, damping=primary_c, preload=primary_f0,
-                name=f"primary_{k}_{side}"))
+        forces += primary_bushings(v, k, f"bogie_{bogie}", x - bogie_x[bogie - 1],
+                                   loads["primary"])
     half, seat = v["secondary.half_span"], v["secondary.height"]
     for k, x in enumerate(bogie_x, 1):
         for side, y in (("left", half), ("right", -half)):
