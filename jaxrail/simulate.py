@@ -55,6 +55,10 @@ class SolverOptions:
     pcoeff, icoeff: the PID controller's proportional and integral coefficients
     (0.4 and 0.3: in flange contact the steps are limited by stability, where diffrax's
     plain integral controller (0 and 1) rejects one step in five; see docs/simulation.md).
+    fixed_step: a constant step [s] instead of the controller (then rtol, atol, dt0,
+    pcoeff and icoeff are unused): the outputs are then smooth functions of the
+    parameters, which gradients checked by finite differences and fits need
+    (docs/identification.md).
     """
 
     rtol: float = 1e-4
@@ -65,6 +69,18 @@ class SolverOptions:
     progress: bool = False
     pcoeff: float = 0.4
     icoeff: float = 0.3
+    fixed_step: float | None = None
+
+    def __post_init__(self):
+        if self.fixed_step is not None and not self.fixed_step > 0.0:
+            raise ValueError(f"fixed_step must be > 0 [s], got {self.fixed_step}")
+
+    def controller(self):
+        """diffrax step-size controller and first step [s]."""
+        if self.fixed_step is not None:
+            return diffrax.ConstantStepSize(), self.fixed_step
+        return diffrax.PIDController(rtol=self.rtol, atol=self.atol, pcoeff=self.pcoeff,
+                                     icoeff=self.icoeff), self.dt0
 
 
 class WheelOutputs(eqx.Module):
@@ -206,12 +222,12 @@ def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignmen
     external = lambda t, q, qdot: contact_loads(vehicle, params.contact, track, q, qdot)[:2]  # noqa: E731
     ts = jnp.linspace(0.0, t1, options.n_outputs)
     meter = diffrax.TqdmProgressMeter() if options.progress else None
+    controller, dt0 = options.controller()
     sol = simulate_system(
-        vehicle.system, params.system, q0, qdot0, t1, dt0=options.dt0,
+        vehicle.system, params.system, q0, qdot0, t1, dt0=dt0,
         saveat=diffrax.SaveAt(ts=ts), rtol=options.rtol, atol=options.atol, solver=solver,
         external=external, max_steps=options.max_steps, adjoint=adjoint, throw=False,
-        stepsize_controller=diffrax.PIDController(rtol=options.rtol, atol=options.atol,
-                                                  pcoeff=options.pcoeff, icoeff=options.icoeff),
+        stepsize_controller=controller,
         event=_derailment_event(vehicle, track, limits, rest_heights), progress_meter=meter)
     q, qdot = sol.ys
     valid = jnp.all(jnp.isfinite(q), axis=1) & jnp.all(jnp.isfinite(qdot), axis=1)

@@ -26,7 +26,8 @@ def test_builtin_scenarios_build(name):
     scenario = load_scenario(name)
     vehicle, params, track = scenario.build()
     assert scenario.name == name
-    assert vehicle.n_wheelsets == 4 and float(params.contact.friction) == scenario.friction
+    assert vehicle.n_wheelsets == {"trailer": 4, "bogie": 2}[scenario.model]
+    assert float(params.contact.friction) == scenario.friction
     assert scenario.solver_options().n_outputs == int(scenario.duration * scenario.output_rate) + 1
 
 
@@ -61,6 +62,7 @@ def test_simplified_scenario_differs_only_in_the_wheel():
     (("length = 100.0", "length = 100.0, radius = 3.0"), "unknown keys"),
     (("[solver]", ""), r"missing table \[solver\]"),
     (("duration = 1.0", 'duration = "long"'), "'duration' must be a float"),
+    (("[solver]", "[solver]\nfixed_step = 0.0"), "fixed_step must be > 0"),
 ])
 def test_bad_scenarios_are_named(change, message):
     text = MINIMAL.replace(*change)
@@ -72,3 +74,20 @@ def test_bad_scenarios_are_named(change, message):
 def test_unknown_scenario_lists_the_builtin_ones():
     with pytest.raises(ValueError, match="paper-curve"):
         load_scenario("no-such-scenario")
+
+
+def test_fixed_steps_cover_the_duration_exactly():
+    scenario = load_scenario("bogie-curve-entry")
+    options = scenario.solver_options()
+    assert options.fixed_step == 5e-4 and options.max_steps == 2001  # 2000 steps + 1
+    assert scenario.solver_options(duration=0.25).max_steps == 501
+    assert load_scenario("paper-curve").solver_options().fixed_step is None
+
+
+def test_bogie_carries_half_the_carbody():
+    vehicle, params, _ = load_scenario("bogie-curve-entry").build()
+    masses = dict(zip(vehicle.system.body_names, np.asarray(params.system.bodies.mass)))
+    assert masses["frame"] == 2615.0 + 32000.0 / 2  # bogie + carbody / 2 [V-src]
+    assert masses["wheelset_1"] + masses["axlebox_1"] == 1813.0
+    preload = np.asarray(params.system.forces["bushing"].preload)[:, 2]
+    assert np.allclose(-4 * preload, masses["frame"] * 9.81)  # four primary bushings

@@ -2,12 +2,15 @@
 duration and solver options, read from TOML files; built-in ones by name.
 
 Built-in: ``paper-curve`` (the paper's example with real S1002 / UIC60 1:40 profiles),
-``paper-curve-simplified`` (the paper's simplified S1002), ``straight``. The file
+``paper-curve-simplified`` (the paper's simplified S1002), ``straight``, and
+``bogie-curve-entry`` (a loaded bogie running into a 300 m curve onto the flange root
+in 1 s, fixed steps: the identification scenario). The file
 format is described in docs/scenarios.md.
 """
 
 import dataclasses
 import importlib.resources
+import math
 import tomllib
 from pathlib import Path
 
@@ -16,14 +19,14 @@ import equinox as eqx
 from ..profiles.named import named_profile
 from ..simulate import SolverOptions, simulate
 from ..track import Arc, Straight, Track, Transition
-from ..vehicles import single_wheelset, trailer
+from ..vehicles import bogie, single_wheelset, trailer
 from ..vehicles.trailer import trailer_values
 
-BUILTIN = ("paper-curve", "paper-curve-simplified", "straight")
+BUILTIN = ("paper-curve", "paper-curve-simplified", "straight", "bogie-curve-entry")
 _SEGMENTS = {"straight": (Straight, {"length"}),
              "transition": (Transition, {"length"}),
              "arc": (Arc, {"length", "radius", "direction", "cant"})}
-_MODELS = ("trailer", "single-wheelset")
+_MODELS = ("trailer", "bogie", "single-wheelset")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -46,12 +49,17 @@ class Scenario:
     atol: float
     output_rate: float
     source: str
+    fixed_step: float | None = None
 
     def solver_options(self, duration=None, progress=False) -> SolverOptions:
         """SolverOptions with ``output_rate`` samples per second over the duration."""
         duration = self.duration if duration is None else duration
-        return SolverOptions(rtol=self.rtol, atol=self.atol, progress=progress,
-                             n_outputs=max(2, int(round(duration * self.output_rate)) + 1))
+        options = SolverOptions(rtol=self.rtol, atol=self.atol, progress=progress,
+                                n_outputs=max(2, int(round(duration * self.output_rate)) + 1))
+        if self.fixed_step is None:
+            return options
+        steps = int(math.ceil(duration / self.fixed_step - 1e-9))
+        return dataclasses.replace(options, fixed_step=self.fixed_step, max_steps=steps + 1)
 
     def track(self) -> Track:
         return Track.from_segments([_SEGMENTS[s["kind"]][0](**{k: v for k, v in s.items()
@@ -62,9 +70,9 @@ class Scenario:
         """``(vehicle, params, track)``."""
         _, wheel = named_profile(self.wheel, self.inclination, kind=None)
         _, rail = named_profile(self.rail, self.inclination, kind=None)
-        if self.model == "trailer":
+        if self.model in ("trailer", "bogie"):
             values = trailer_values(self.vehicle_data)
-            vehicle, params = trailer(wheel, rail, values)
+            vehicle, params = (trailer if self.model == "trailer" else bogie)(wheel, rail, values)
         else:
             vehicle, params = single_wheelset(wheel, rail)
         params = eqx.tree_at(lambda p: p.contact.friction, params, self.friction)
@@ -143,7 +151,10 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
         atol=float(solver.get("atol", 1e-7)),
         output_rate=float(solver.get("output_rate", 50.0)),
         source=where,
+        fixed_step=None if "fixed_step" not in solver else float(solver["fixed_step"]),
     )
+    if scenario.fixed_step is not None and not scenario.fixed_step > 0.0:
+        raise ValueError(f"{where}: fixed_step must be > 0, got {scenario.fixed_step}")
     for key in ("speed", "duration", "rtol", "atol", "output_rate", "friction"):
         if not getattr(scenario, key) > 0.0:
             raise ValueError(f"{where}: {key} must be > 0, got {getattr(scenario, key)}")
