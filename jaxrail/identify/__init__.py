@@ -1,0 +1,154 @@
+"""Identification of vehicle and contact parameters from measured time histories.
+
+``identify(scenario, measurements, ["contact_stiffness", "friction"])`` simulates the
+scenario with trial values of the named parameters (:mod:`.parameters`), compares the
+measured channels (:mod:`.measurements`) with the simulated ones, and fits the values
+by weighted least squares with optax in bounded log space, gradients through the whole
+simulation by reverse-mode AD with recursive checkpointing (:mod:`.fit`). The
+uncertainty is the Gauss-Newton one at the optimum; per channel, the same from that
+channel alone tells which measurement identifies which parameter.
+"""
+
+import dataclasses
+
+import diffrax
+import jax.numpy as jnp
+import numpy as np
+
+from ..simulate import SolverOptions, solve
+from .fit import FitResult, channel_standard_errors, least_squares
+from .measurements import (Measurements, channel_values, check_channels, read_measurements,
+                           sample, write_measurements)
+from .parameters import PARAMETERS, get_values, parameter, set_values
+
+__all__ = ["FitResult", "Identification", "Measurements", "PARAMETERS", "channel_values",
+           "get_values", "identify", "least_squares", "parameter", "read_measurements",
+           "set_values", "simulate_channels", "simulation_residuals", "write_measurements"]
+
+
+def _adjoint(options: SolverOptions, forward: bool):
+    if forward:
+        return diffrax.ForwardMode()
+    if options.fixed_step is not None:
+        # one checkpoint per step: no recomputation; memory ~ steps x solver state
+        return diffrax.RecursiveCheckpointAdjoint(checkpoints=options.max_steps)
+    return diffrax.RecursiveCheckpointAdjoint()
+
+
+def simulate_channels(vehicle, params, track, channels, times, *, speed, misalignment,
+                      duration, options: SolverOptions, s0=None, adjoint=None):
+    """Simulated channels (M, C) at ``times`` (M,) [s] (traceable, differentiable)."""
+    result = solve(vehicle, track, params, duration, speed, misalignment, s0, options=options,
+                   adjoint=adjoint)
+    values = channel_values(channels, vehicle, params, track, result)
+    return sample(result.t, values, jnp.asarray(times))
+
+
+def simulation_residuals(vehicle, params, track, names, measurements: Measurements, *,
+                         speed, misalignment, duration, options: SolverOptions, s0=None,
+                         forward=False, adjoint=None):
+    """``(values (k,), measured (M, C)) -> r (M C,)``: whitened residuals (simulated -
+    measured) / noise, sample-major, of the simulation with the named parameters set
+    to ``values``.
+    ``forward``: use diffrax's forward-mode adjoint (for ``jax.jacfwd``) instead of
+    recursive checkpointing (for ``jax.grad``; with fixed steps one checkpoint per step,
+    else diffrax's default; ``adjoint`` overrides it). Samples after an early stop
+    (derailed, failed) count as 1e3 noise levels off."""
+    check_channels(measurements.channels, vehicle)
+    for name in names:
+        parameter(name).get(vehicle, params)  # raises for a parameter the vehicle lacks
+    if measurements.time[-1] > duration + 1e-12:
+        raise ValueError(f"measurements reach {measurements.time[-1]} s, the simulation "
+                         f"only {duration} s")
+    noise = jnp.asarray(measurements.noise)
+    adjoint = _adjoint(options, forward) if adjoint is None or forward else adjoint
+
+    def residuals(values, measured):
+        trial = set_values(vehicle, params, names, values)
+        simulated = simulate_channels(vehicle, trial, track, measurements.channels,
+                                      measurements.time, speed=speed,
+                                      misalignment=misalignment, duration=duration,
+                                      options=options, s0=s0, adjoint=adjoint)
+        finite = jnp.isfinite(simulated)
+        r = (jnp.where(finite, simulated, 0.0) - measured) / noise
+        return jnp.where(finite, r, 1e3).ravel()
+
+    return residuals
+
+
+@dataclasses.dataclass(frozen=True)
+class Identification:
+    """Outcome of :func:`identify`: ``fit`` (:class:`FitResult`), the ``measurements``,
+    the channels ``simulated`` (M, C) with the fitted values, and
+    ``channel_standard_errors``: {channel: (k,) standard errors from it alone}."""
+
+    fit: FitResult
+    measurements: Measurements
+    simulated: np.ndarray
+    channel_standard_errors: dict
+
+    def as_dict(self) -> dict:
+        out = self.fit.as_dict()
+        out["channel_standard_errors"] = self.channel_standard_errors
+        out["channels"] = list(self.measurements.channels)
+        out["rms_residual_per_channel"] = dict(zip(self.measurements.channels, np.sqrt(
+            np.mean(((self.simulated - self.measurements.values) / self.measurements.noise)
+                    ** 2, axis=0)).tolist()))
+        return out
+
+
+def identify(scenario, measurements: Measurements, names, initial=None, bounds=None,
+             method="lbfgs", max_iterations=30, tolerance=1e-9, progress=False,
+             built=None) -> Identification:
+    """Fit the named parameters of ``scenario`` (:class:`jaxrail.scenarios.Scenario`)
+    to ``measurements``.
+
+    initial: {name: value} (default: the scenario's values); bounds: {name: (lo, hi)}
+    (default a factor 10 either side of the initial value); method: "lbfgs" or "adam";
+    progress: show a tqdm bar with the loss; built: ``(vehicle, params, track)`` if
+    already built.
+    """
+    names = tuple(names)
+    if not names or len(set(names)) != len(names):
+        raise ValueError(f"give distinct parameter names to fit, got {names}")
+    vehicle, params, track = scenario.build() if built is None else built
+    current = np.asarray(get_values(vehicle, params, names))
+    initial = dict(zip(names, current)) | dict(initial or {})
+    unknown = set(initial) - set(names)
+    if unknown:
+        raise ValueError(f"initial values for parameters not fitted: {sorted(unknown)}")
+    x0 = np.array([float(initial[n]) for n in names])
+    limits = {n: (v / 10.0, v * 10.0) for n, v in zip(names, x0)} | dict(bounds or {})
+    lower = np.array([limits[n][0] for n in names])
+    upper = np.array([limits[n][1] for n in names])
+    options = scenario.solver_options()
+    common = dict(speed=scenario.speed, misalignment=scenario.misalignment,
+                  duration=scenario.duration, options=options)
+    residuals = simulation_residuals(vehicle, params, track, names, measurements, **common)
+    forward = simulation_residuals(vehicle, params, track, names, measurements, forward=True,
+                                   **common)
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=max_iterations, desc="identify", unit="it")
+
+    def report(iteration, loss, values):
+        if bar is not None:
+            bar.set_postfix_str(f"loss {loss:.6g} " + " ".join(
+                f"{n}={v:.5g}" for n, v in zip(names, values)))
+            if iteration:
+                bar.update(1)
+
+    try:
+        fit = least_squares(residuals, names, x0, lower, upper,
+                            data=jnp.asarray(measurements.values), method=method,
+                            max_iterations=max_iterations, tolerance=tolerance,
+                            jacobian_residuals=forward, progress=report)
+    finally:
+        if bar is not None:
+            bar.close()
+    simulated = measurements.values + measurements.noise * fit.residuals.reshape(
+        measurements.values.shape)
+    per_channel = channel_standard_errors(fit, measurements.channels, len(measurements.time))
+    return Identification(fit, measurements, simulated, per_channel)

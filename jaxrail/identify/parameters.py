@@ -1,0 +1,107 @@
+"""Named scalar parameters of a vehicle that can be fitted or differentiated.
+
+Each name reads and writes one number of :class:`jaxrail.vehicles.VehicleParams`
+(traced: writing it never recompiles). Contact: ``contact_stiffness`` (the factor on
+the Hertz stiffness, 1 = Hertz), ``friction`` [-], ``restitution`` (the normal law's
+c_e, eq. 17 and the damped Hertz laws). Suspension (every element of the family at
+once, per element): ``primary_longitudinal_stiffness``, ``primary_lateral_stiffness``,
+``primary_vertical_stiffness`` [N/m], ``primary_vertical_damping`` [N s/m] and the
+``secondary_*`` ones (lateral and vertical damping too) for vehicles with a secondary
+suspension.
+"""
+
+import dataclasses
+from collections.abc import Callable
+
+import equinox as eqx
+import jax.numpy as jnp
+
+from ..vehicles.vehicle import Vehicle, VehicleParams
+
+
+@dataclasses.dataclass(frozen=True)
+class Parameter:
+    """A named parameter: unit, meaning, and how to read and write it."""
+
+    name: str
+    unit: str
+    description: str
+    get: Callable[[Vehicle, VehicleParams], object]
+    set: Callable[[Vehicle, VehicleParams, object], VehicleParams]
+
+
+def _contact(field, unit, description):
+    return Parameter(
+        field if field != "stiffness_scale" else "contact_stiffness", unit, description,
+        lambda vehicle, params: getattr(params.contact, field),
+        lambda vehicle, params, value: eqx.tree_at(lambda p: getattr(p.contact, field),
+                                                   params, jnp.asarray(value, jnp.float64)))
+
+
+def _restitution_get(vehicle, params):
+    law = params.contact.normal_law
+    if not hasattr(law, "restitution"):
+        raise ValueError(f"the normal law {type(law).__name__} has no restitution")
+    return law.restitution
+
+
+def _restitution_set(vehicle, params, value):
+    _restitution_get(vehicle, params)
+    return eqx.tree_at(lambda p: p.contact.normal_law.restitution, params,
+                       jnp.asarray(value, jnp.float64))
+
+
+def _bushing_rows(vehicle, family):
+    """Indices of the bushings named ``<family>_...`` in the vehicle's bushing group."""
+    for group in vehicle.system.force_groups:
+        if group.kind == "bushing":
+            rows = [i for i, name in enumerate(group.names) if name.startswith(family + "_")]
+            if rows:
+                return jnp.asarray(rows)
+    raise ValueError(f"vehicle {vehicle.name!r} has no {family} suspension bushings")
+
+
+def _bushing(family, field, column, unit, description):
+    def get(vehicle, params):
+        rows = _bushing_rows(vehicle, family)
+        return jnp.mean(getattr(params.system.forces["bushing"], field)[rows, column])
+
+    def set_(vehicle, params, value):
+        rows = _bushing_rows(vehicle, family)
+        where = lambda p: getattr(p.system.forces["bushing"], field)  # noqa: E731
+        return eqx.tree_at(where, params, where(params).at[rows, column].set(value))
+
+    return Parameter(f"{family}_{description.replace(' ', '_')}", unit,
+                     f"{family} suspension {description}, per element", get, set_)
+
+
+_AXES = {"longitudinal": 0, "lateral": 1, "vertical": 2}
+PARAMETERS = {p.name: p for p in [
+    _contact("stiffness_scale", "-", "factor on the Hertz contact stiffness (1 = Hertz)"),
+    _contact("friction", "-", "wheel-rail friction coefficient"),
+    Parameter("restitution", "-", "c_e of the normal law (effective e = sqrt(c_e))",
+              _restitution_get, _restitution_set),
+    *[_bushing(family, "stiffness", column, "N/m", f"{axis} stiffness")
+      for family in ("primary", "secondary") for axis, column in _AXES.items()],
+    *[_bushing(family, "damping", column, "N s/m", f"{axis} damping")
+      for family in ("primary", "secondary") for axis, column in _AXES.items()],
+]}
+
+
+def parameter(name: str) -> Parameter:
+    """The :class:`Parameter` called ``name``; ValueError lists the known names."""
+    if name not in PARAMETERS:
+        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(PARAMETERS)}")
+    return PARAMETERS[name]
+
+
+def get_values(vehicle, params, names) -> jnp.ndarray:
+    """Values (k,) of the named parameters."""
+    return jnp.stack([jnp.asarray(parameter(n).get(vehicle, params)) for n in names])
+
+
+def set_values(vehicle, params, names, values) -> VehicleParams:
+    """``params`` with the named parameters set to ``values`` (k,) (traced)."""
+    for k, name in enumerate(names):
+        params = parameter(name).set(vehicle, params, values[k])
+    return params
