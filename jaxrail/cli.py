@@ -145,6 +145,60 @@ def _simulate_command(args):
     return 0 if result.status == "successful" else 1
 
 
+def _assignments(text, option, parse=float):
+    """{name: value} from "a=1,b=2" (``parse`` converts each value)."""
+    out = {}
+    for item in filter(None, (text or "").split(",")):
+        name, sep, value = item.partition("=")
+        if not sep:
+            raise ValueError(f"{option}: expected name=value, got {item!r}")
+        try:
+            out[name.strip()] = parse(value)
+        except ValueError:
+            raise ValueError(f"{option}: bad value in {item!r}") from None
+    return out
+
+
+def _identify_command(args):
+    import json
+
+    from ._files import write_text
+    from .identify import identify, read_measurements
+    from .scenarios import load_scenario
+
+    scenario = load_scenario(args.scenario)
+    measurements = read_measurements(args.measured)
+    names = [n.strip() for n in args.fit.split(",") if n.strip()]
+    initial = _assignments(args.initial, "--initial")
+    bounds = _assignments(args.bounds, "--bounds",
+                          lambda v: tuple(float(x) for x in v.split(":", 1)))
+    if any(len(b) != 2 for b in bounds.values()):
+        raise ValueError("--bounds: expected name=lower:upper")
+    print(f"jaxrail identify {scenario.name}: fitting {', '.join(names)} to "
+          f"{len(measurements.channels)} channels x {len(measurements.time)} samples "
+          "(compiling the simulation and its gradient first) ...", file=sys.stderr)
+    result = identify(scenario, measurements, names, initial=initial, bounds=bounds,
+                      method=args.method, max_iterations=args.iterations,
+                      progress=not args.quiet)
+    summary = result.as_dict()
+    summary["scenario"] = scenario.name
+    for name, entry in summary["parameters"].items():
+        print(f"{name} = {entry['value']:.6g} +- {entry['standard_error']:.2g}",
+              file=sys.stderr)
+    text = json.dumps(summary, indent=2)
+    if args.out:
+        write_text(args.out, text + "\n")
+        print(f"wrote {args.out}", file=sys.stderr)
+    else:
+        print(text)
+    if args.plot:
+        from .plots.identification import plot_identification
+
+        plot_identification(result, args.plot)
+        print(f"wrote {args.plot}", file=sys.stderr)
+    return 0 if result.fit.converged else 1
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="jaxrail", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -187,6 +241,25 @@ def build_parser():
     simulate.add_argument("--plots", help="write the figures (PNG) into this directory")
     simulate.add_argument("--quiet", action="store_true", help="no progress bar")
     simulate.set_defaults(run=_simulate_command)
+
+    ident = commands.add_parser(
+        "identify", help="fit contact or suspension parameters to measured time histories")
+    ident.add_argument("scenario", help="a built-in scenario (e.g. bogie-curve-entry) or a "
+                                        ".toml file")
+    ident.add_argument("--measured", required=True,
+                       help="CSV of measured channels (format: docs/identification.md)")
+    ident.add_argument("--fit", required=True,
+                       help="comma-separated parameter names, e.g. contact_stiffness,friction")
+    ident.add_argument("--initial", help="initial guesses name=value,... (default: the "
+                                         "scenario's values)")
+    ident.add_argument("--bounds", help="bounds name=lower:upper,... (default: a factor "
+                                        "10 either side of the initial guess)")
+    ident.add_argument("--method", choices=("lbfgs", "adam"), default="lbfgs")
+    ident.add_argument("--iterations", type=int, default=30, help="maximum iterations")
+    ident.add_argument("--out", help="write the JSON result here (default: stdout)")
+    ident.add_argument("--plot", help="write a PNG of the loss, parameters and channels")
+    ident.add_argument("--quiet", action="store_true", help="no progress bar")
+    ident.set_defaults(run=_identify_command)
     return parser
 
 
