@@ -1,0 +1,66 @@
+"""`jaxrail identify`: bad input is named before anything compiles; the figure of a fit
+is written. (The fit itself runs in experiments/identify_contact: compiling the
+gradient of a simulation takes about 10 minutes, over the suite's budget.)"""
+
+import subprocess
+import sys
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrail.identify import Identification, Measurements, write_measurements
+from jaxrail.identify.fit import least_squares
+from jaxrail.plots.identification import plot_identification
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", "jaxrail.cli", "identify", *args],
+                          capture_output=True, text=True, timeout=300)
+
+
+@pytest.fixture
+def measured(tmp_path):
+    path = tmp_path / "m.csv"
+    t = np.linspace(0.0, 0.5, 6)
+    write_measurements(path, Measurements(t, ("wheelset_lateral_1",), 1e-3 * t[:, None],
+                                          [1e-4]))
+    return path
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--fit", "stiffness"), "unknown parameter 'stiffness'"),
+    (("--fit", "secondary_lateral_stiffness"), "no secondary suspension"),
+    (("--fit", "friction", "--initial", "friction"), "--initial: expected name=value"),
+    (("--fit", "friction", "--bounds", "friction=0.1"), "--bounds: expected name=lower:upper"),
+    (("--fit", "friction", "--initial", "contact_stiffness=2"), "not fitted"),
+])
+def test_bad_arguments_are_named(measured, args, message):
+    done = run("bogie-curve-entry", "--measured", str(measured), *args)
+    assert done.returncode == 2
+    assert message in done.stderr
+
+
+def test_measurements_longer_than_the_run_are_refused(tmp_path):
+    path = tmp_path / "long.csv"
+    write_measurements(path, Measurements([0.0, 2.0], ("wheelset_lateral_1",),
+                                          [[0.0], [0.0]], [1e-4]))
+    done = run("bogie-curve-entry", "--measured", str(path), "--fit", "friction")
+    assert done.returncode == 2 and "only 1.0 s" in done.stderr
+
+
+def test_figure_of_a_fit(tmp_path):
+    t = np.linspace(0.0, 1.0, 30)
+    data = 2.0 * np.exp(-1.5 * t)
+
+    def residuals(v, y):
+        return (v[0] * jnp.exp(-v[1] * jnp.asarray(t)) - y) / 0.01
+
+    fit = least_squares(residuals, ("a", "k"), [2.5, 1.0], [0.2, 0.15], [20.0, 15.0],
+                        data=jnp.asarray(data))
+    measured = Measurements(t, ("wheelset_lateral_1",), data[:, None], [0.01])
+    simulated = data[:, None] + 0.01 * fit.residuals[:, None]
+    path = tmp_path / "fit.png"
+    plot_identification(Identification(fit, measured, simulated, {}), path,
+                        truth={"a": 2.0, "k": 1.5})
+    assert path.stat().st_size > 10_000
