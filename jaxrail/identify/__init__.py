@@ -131,7 +131,7 @@ def identify(scenario, measurements: Measurements, names, initial=None, bounds=N
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=max_iterations, desc="identify", unit="it")
+        bar = tqdm(total=max_iterations, desc="identify", unit="it", ncols=160)
 
     def report(iteration, loss, values):
         if bar is not None:
