@@ -97,11 +97,22 @@ def _geometry_command(args):
     return 0
 
 
-def _simulate_command(args):
+def _emit_json(data, path):
+    """Write ``data`` as indented JSON to ``path`` (whole or not at all), or print it."""
     import json
 
-    from . import __version__
     from ._files import write_text
+
+    text = json.dumps(data, indent=2)
+    if path:
+        write_text(path, text + "\n")
+        print(f"wrote {path}", file=sys.stderr)
+    else:
+        print(text)
+
+
+def _simulate_command(args):
+    from . import __version__
     from .results import summarize, write_results
     from .scenarios import load_scenario, run_scenario
 
@@ -122,12 +133,7 @@ def _simulate_command(args):
             "scenario": scenario.name, "description": scenario.description,
             "jaxrail_version": __version__, "body_names": list(vehicle.system.body_names)})
         print(f"wrote {args.out}", file=sys.stderr)
-    text = json.dumps(summary, indent=2)
-    if args.summary:
-        write_text(args.summary, text + "\n")
-        print(f"wrote {args.summary}", file=sys.stderr)
-    else:
-        print(text)
+    _emit_json(summary, args.summary)
     if args.plots:
         from .plots import curve
 
@@ -160,9 +166,6 @@ def _assignments(text, option, parse=float):
 
 
 def _identify_command(args):
-    import json
-
-    from ._files import write_text
     from .identify import identify, read_measurements
     from .scenarios import load_scenario
 
@@ -185,12 +188,7 @@ def _identify_command(args):
     for name, entry in summary["parameters"].items():
         print(f"{name} = {entry['value']:.6g} +- {entry['standard_error']:.2g}",
               file=sys.stderr)
-    text = json.dumps(summary, indent=2)
-    if args.out:
-        write_text(args.out, text + "\n")
-        print(f"wrote {args.out}", file=sys.stderr)
-    else:
-        print(text)
+    _emit_json(summary, args.out)
     if args.plot:
         from .plots.identification import plot_identification
 

@@ -26,9 +26,11 @@ __all__ = ["FitResult", "Identification", "Measurements", "PARAMETERS", "channel
            "set_values", "simulate_channels", "simulation_residuals", "write_measurements"]
 
 
-def _adjoint(options: SolverOptions, forward: bool):
+def _adjoint(options: SolverOptions, forward: bool, override=None):
     if forward:
         return diffrax.ForwardMode()
+    if override is not None:
+        return override
     if options.fixed_step is not None:
         # one checkpoint per step: no recomputation; memory ~ steps x solver state
         return diffrax.RecursiveCheckpointAdjoint(checkpoints=options.max_steps)
@@ -61,7 +63,7 @@ def simulation_residuals(vehicle, params, track, names, measurements: Measuremen
         raise ValueError(f"measurements reach {measurements.time[-1]} s, the simulation "
                          f"only {duration} s")
     noise = jnp.asarray(measurements.noise)
-    adjoint = _adjoint(options, forward) if adjoint is None or forward else adjoint
+    adjoint = _adjoint(options, forward, adjoint)
 
     def residuals(values, measured):
         trial = set_values(vehicle, params, names, values)

@@ -93,8 +93,8 @@ DECREMENT = 1e-6  # L-BFGS stops when the predicted decrease of the loss is belo
 
 def _compiled(residuals, method, learning_rate):
     """``(optimizer, value_and_grad, value, update)``, jitted once per residual function
-    and method: the fits of one process share the compiled programs (data and bounds
-    are arguments, not constants). The line search runs on the host and tries steps
+    object and method: fits that pass the same function share the compiled programs
+    (data and bounds are arguments, not constants). The line search runs on the host and tries steps
     with the loss alone (a forward simulation, about a tenth of a gradient's cost)."""
     key = (residuals, method, learning_rate)
     if key in _COMPILED:
@@ -235,5 +235,6 @@ def channel_standard_errors(fit: FitResult, channels, samples_per_channel) -> di
         if np.linalg.cond(information) > 1e12:
             out[channel] = [math.inf] * len(fit.names)
         else:
-            out[channel] = (fit.values * np.sqrt(np.diag(np.linalg.inv(information)))).tolist()
+            covariance, _ = gauss_newton_covariance(jacobian[:, k, :])
+            out[channel] = (fit.values * np.sqrt(np.diag(covariance))).tolist()
     return out
