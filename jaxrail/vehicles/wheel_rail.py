@@ -94,10 +94,14 @@ def _cube_root(x):
 def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_velocity):
     """Forces of one patch slot (scalars); ``patch`` is a ContactPatches entry."""
     G, nu = params.shear_modulus, params.poisson
-    radius_x = 1.0 / patch.curvature_wheel_x
-    unit = hertz_from_curvatures(1.0, radius_x, patch.curvature_contact_y, 0.0, G, nu,
-                                 min_curvature_ratio=MIN_CURVATURE_RATIO)
-    stiffness = params.stiffness_scale * unit.stiffness
+    # A diverged (NaN) state must stop its own run with a status, not raise Hertz's
+    # curvature check for a whole batch: NaN curvatures go past the check and come back
+    # as a NaN stiffness (finite states never have them, active or not).
+    usable = jnp.isfinite(patch.curvature_wheel_x) & jnp.isfinite(patch.curvature_contact_y)
+    radius_x = 1.0 / jnp.where(usable, patch.curvature_wheel_x, 1.0)
+    unit = hertz_from_curvatures(1.0, radius_x, jnp.where(usable, patch.curvature_contact_y, 0.0),
+                                 0.0, G, nu, min_curvature_ratio=MIN_CURVATURE_RATIO)
+    stiffness = jnp.where(usable, params.stiffness_scale * unit.stiffness, jnp.nan)
     wheel_point_velocity = velocity + jnp.cross(angular_velocity, patch.wheel_point - centre)
     rate = -wheel_point_velocity @ patch.normal
     normal_force = jnp.where(patch.active,
