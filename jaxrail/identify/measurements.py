@@ -180,8 +180,26 @@ def write_measurements(path, measurements: Measurements, comment: str = "") -> N
     write_text(path, "\n".join(lines) + "\n")
 
 
-def sample(result_t, values, times):
-    """Linear interpolation of ``values`` (T, C) at output times ``result_t`` (T,) onto
-    ``times`` (M,): (M, C) (traceable)."""
-    return jax.vmap(lambda column: jnp.interp(times, result_t, column), in_axes=1,
-                    out_axes=1)(values)
+def sample(result_t, values, times, width=None):
+    """``values`` (T, C) at output times ``result_t`` (T,) seen at ``times`` (M,)
+    through a triangular window of half-width ``width`` [s]: each sample is the
+    weighted mean with weights max(0, 1 - |t - t_m| / width), renormalised where the
+    window passes the ends. ``width`` None is the output spacing, i.e. linear
+    interpolation. (M, C), traceable; a sample is NaN if a NaN value has weight in it.
+
+    With ``width`` the measurement's sample period T_s this is the anti-aliasing filter
+    of the acquisition (an average over about one period): its response sinc^2(f T_s)
+    passes slow signals, has its first zero at 1/T_s and takes ringing far above the
+    Nyquist frequency (wheel-rail contact resonances, hundreds of Hz) down to a few per
+    cent instead of folding it into the samples (docs/identification.md).
+    """
+    result_t = jnp.asarray(result_t)
+    times = jnp.asarray(times)
+    if width is None:
+        width = result_t[1] - result_t[0]
+    weights = jnp.maximum(0.0, 1.0 - jnp.abs(times[:, None] - result_t[None, :]) / width)
+    weights = weights / jnp.sum(weights, axis=1, keepdims=True)
+    finite = jnp.isfinite(values)
+    mean = weights @ jnp.where(finite, values, 0.0)
+    reached = weights @ jnp.where(finite, 0.0, 1.0)
+    return jnp.where(reached > 0.0, jnp.nan, mean)

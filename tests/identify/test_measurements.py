@@ -61,3 +61,28 @@ def test_sampling_interpolates_linearly_between_outputs():
     out = np.asarray(sample(t, values, np.array([0.1, 0.5, 0.9])))
     assert np.allclose(out[:, 0], [1.2, 2.0, 2.8])
     assert np.allclose(out[1, 1], 0.25)
+
+
+def test_acquisition_window_passes_slow_signals_and_removes_ringing_above_nyquist():
+    """Sampled at 100 Hz from outputs at 800 Hz with the one-period window: a 2 Hz
+    signal keeps its amplitude within 1.5 % (sinc^2(0.02) = 0.9987, plus the discrete
+    window), a 170 Hz ringing (aliased to 30 Hz by plain sampling) drops below 3 %."""
+    t = np.linspace(0.0, 1.0, 801)
+    times = np.linspace(0.0, 1.0, 101)
+    slow = np.sin(2 * np.pi * 2.0 * t)
+    ringing = np.sin(2 * np.pi * 170.0 * t + 0.3)
+    out = np.asarray(sample(t, np.stack([slow, ringing], axis=1), times, width=0.01))
+    inner = slice(2, -2)  # the window is cut at the ends
+    assert np.max(np.abs(out[inner, 0] - np.sin(2 * np.pi * 2.0 * times[inner]))) < 0.015
+    plain = np.asarray(sample(t, ringing[:, None], times))[:, 0]
+    assert np.max(np.abs(plain)) > 0.9  # plain sampling keeps the full ringing, aliased
+    assert np.max(np.abs(out[inner, 1])) < 0.03
+
+
+def test_a_nan_output_spoils_only_the_samples_whose_window_reaches_it():
+    t = np.linspace(0.0, 1.0, 81)
+    values = np.ones((81, 1))
+    values[60:] = np.nan  # a run that stopped at 0.74 s
+    out = np.asarray(sample(t, values, np.linspace(0.0, 1.0, 11), width=0.1))[:, 0]
+    assert np.allclose(out[:7], 1.0)  # windows up to 0.7 s end before 0.75 s
+    assert np.all(np.isnan(out[8:]))
