@@ -197,6 +197,74 @@ def _identify_command(args):
     return 0 if result.fit.converged else 1
 
 
+def _montecarlo_command(args):
+    import numpy as np
+
+    from .montecarlo import parse_variation, run_montecarlo, write_table
+    from .montecarlo.sampling import check_names
+    from .identify import PARAMETERS
+    from .scenarios import load_scenario
+
+    if args.distributed:
+        import jax
+
+        jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
+    if args.samples < 1:
+        raise ValueError(f"--samples must be >= 1, got {args.samples}")
+    if args.duration is not None and not args.duration > 0.0:
+        raise ValueError(f"--duration must be > 0, got {args.duration}")
+    for path in args.out or ():
+        if Path(path).suffix.lower() not in (".csv", ".parquet"):
+            raise ValueError(f"--out {path}: the suffix must be .csv or .parquet")
+    variations = [parse_variation(v) for v in args.vary or ()]
+    check_names(variations, PARAMETERS)
+    scenario = load_scenario(args.scenario)
+    duration = scenario.duration if args.duration is None else args.duration
+    import jax
+
+    devices = jax.devices()
+    print(f"jaxrail montecarlo {scenario.name}: {args.samples} samples of {duration:g} s "
+          f"({args.design}, seed {args.seed}) on {len(devices)} device(s); compiling the "
+          "batched simulation first ...", file=sys.stderr)
+    result = run_montecarlo(scenario, variations, args.samples, seed=args.seed,
+                            design=args.design, duration=duration, chunk=args.chunk,
+                            progress=not args.quiet)
+    table = result.table
+    n = len(table["status"])
+    print(f"{result.statuses} in {result.run_time_s:.1f} s (+ {result.compile_time_s:.1f} s "
+          f"compiling), {n * duration / result.run_time_s:.3g} simulated s per wall s, "
+          f"chunks of {result.chunk}", file=sys.stderr)
+    if jax.process_index() == 0:
+        for path in args.out or ():
+            write_table(path, table)
+            print(f"wrote {path}", file=sys.stderr)
+        if args.plots:
+            from .plots.montecarlo import plot_distributions, plot_maps
+
+            directory = Path(args.plots)
+            directory.mkdir(parents=True, exist_ok=True)
+            axes = [v.name for v in variations][:2]
+            if len(axes) == 2:
+                plot_maps(table, directory / "maps.png", x=axes[0], y=axes[1])
+            plot_distributions(table, directory / "distributions.png")
+            print(f"wrote figures to {directory}", file=sys.stderr)
+    ok = table["status"] == "successful"
+    stats = {"scenario": scenario.name, "samples": n, "seed": args.seed,
+             "duration_s": duration, "statuses": result.statuses,
+             "compile_time_s": result.compile_time_s, "run_time_s": result.run_time_s,
+             "devices": result.devices, "chunk": result.chunk}
+    for key in table:
+        values = np.asarray(table[key])
+        if values.dtype.kind == "f" and key not in ("sample",):
+            good = values[ok & np.isfinite(values)]
+            if good.size:
+                stats.setdefault("successful_samples", {})[key] = {
+                    "min": float(good.min()), "median": float(np.median(good)),
+                    "max": float(good.max())}
+    _emit_json(stats, args.summary)
+    return 0 if np.all(ok) else 1
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="jaxrail", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -258,6 +326,33 @@ def build_parser():
     ident.add_argument("--plot", help="write a PNG of the loss, parameters and channels")
     ident.add_argument("--quiet", action="store_true", help="no progress bar")
     ident.set_defaults(run=_identify_command)
+
+    mc = commands.add_parser(
+        "montecarlo", help="many runs of a scenario over drawn speeds, misalignments, parameters")
+    mc.add_argument("scenario", help="a built-in scenario or a .toml file")
+    mc.add_argument("--samples", type=int, required=True, help="number of samples N")
+    mc.add_argument("--vary", action="append", metavar="NAME=SPREAD",
+                    help="an input and its spread: lo:hi (uniform), normal:mean,sd, or "
+                         "a,b,c; inputs speed [m/s], misalignment [m], or a parameter name "
+                         "(friction, contact_stiffness, ...). Repeat for several")
+    mc.add_argument("--design", choices=("latin", "random", "grid"), default="latin",
+                    help="sampling design (default: latin hypercube)")
+    mc.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    mc.add_argument("--chunk", type=int, help="samples per compiled batch (default: "
+                                              "min(N, 64), rounded to the devices)")
+    mc.add_argument("--duration", type=float, help="simulated time [s] (default: the "
+                                                   "scenario's)")
+    mc.add_argument("--out", action="append", help="write the table to this .csv or "
+                                                   ".parquet file (repeat for both)")
+    mc.add_argument("--summary", help="write the JSON statistics here (default: stdout)")
+    mc.add_argument("--plots", help="write the maps and distributions (PNG) here")
+    mc.add_argument("--distributed", action="store_true",
+                    help="call jax.distributed.initialize first (several hosts)")
+    mc.add_argument("--coordinator", help="with --distributed: host:port of process 0")
+    mc.add_argument("--num-processes", type=int, help="with --distributed")
+    mc.add_argument("--process-id", type=int, help="with --distributed")
+    mc.add_argument("--quiet", action="store_true", help="no progress bar")
+    mc.set_defaults(run=_montecarlo_command)
     return parser
 
 

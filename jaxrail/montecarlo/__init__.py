@@ -1,0 +1,110 @@
+"""Batched Monte Carlo: many runs of one scenario over drawn speeds, misalignments and
+parameter values, as one vmapped simulation sharded across the local devices.
+
+``run_montecarlo(scenario, [parse_variation("speed=10:25"), ...], n=200, seed=1)``
+draws the samples (:mod:`.sampling`), runs them in chunks (:mod:`.batch`) and returns a
+:class:`MonteCarlo` whose ``table`` has one row per sample: its inputs and the
+quantities of :mod:`.summary` (maximum lateral displacement, Y/Q against Nadal, Sum Y
+against Prud'homme, maximum normal force, flange contact fraction, wear number,
+status). ``write_table`` writes it as CSV or Parquet.
+"""
+
+import dataclasses
+
+import numpy as np
+
+from ..identify.parameters import PARAMETERS, get_values
+from .batch import chunk_size, run_chunks
+from .sampling import DESIGNS, Variation, check_names, draw, parse_variation
+from .summary import sample_row
+from .table import read_table, write_table
+
+__all__ = ["DESIGNS", "MonteCarlo", "Variation", "draw", "parse_variation", "read_table",
+           "run_montecarlo", "run_samples", "write_table"]
+
+
+@dataclasses.dataclass
+class MonteCarlo:
+    """Result of :func:`run_montecarlo`: ``table`` {column: array} (inputs first),
+    ``samples`` {input: array}, ``compile_time_s``, ``run_time_s`` (all chunks, without
+    compiling), ``chunk`` (samples per compiled call), ``devices``, ``seed``, and
+    ``results`` (the batched SimulationResult of every sample as NumPy, when kept)."""
+
+    table: dict
+    samples: dict
+    compile_time_s: float
+    run_time_s: float
+    chunk: int
+    devices: int
+    seed: int | None = None
+    results: object = None
+
+    @property
+    def statuses(self) -> dict:
+        """{status: count}."""
+        names, counts = np.unique(self.table["status"], return_counts=True)
+        return {str(k): int(v) for k, v in zip(names, counts)}
+
+    def throughput(self, duration: float) -> float:
+        """Simulated seconds per wall second (run time, without compiling)."""
+        return len(self.table["status"]) * duration / self.run_time_s
+
+
+def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=None,
+                progress=False, keep_results=False, built=None) -> MonteCarlo:
+    """Run ``scenario`` once per sample: ``samples`` {input: array (N,)} with inputs
+    ``speed`` [m/s], ``misalignment`` [m] and parameter names (others keep the
+    scenario's values). ``duration`` [s] overrides the scenario's; ``devices``: the
+    devices to shard over (default all); ``built``: the scenario's ``build()`` output,
+    to reuse."""
+    import jax
+
+    check_names([Variation(k, "choice", (0.0,)) for k in samples], PARAMETERS)
+    lengths = {k: len(np.atleast_1d(v)) for k, v in samples.items()}
+    if len(set(lengths.values())) > 1:
+        raise ValueError(f"samples: every input needs the same number of values, got {lengths}")
+    n = next(iter(lengths.values()), 1)
+    vehicle, params, track = scenario.build() if built is None else built
+    duration = scenario.duration if duration is None else float(duration)
+    options = scenario.solver_options(duration=duration)
+    names = tuple(k for k in samples if k in PARAMETERS)
+    speed = np.broadcast_to(np.asarray(samples.get("speed", scenario.speed), np.float64), (n,))
+    shift = np.broadcast_to(np.asarray(samples.get("misalignment", scenario.misalignment),
+                                       np.float64), (n,))
+    values = np.stack([np.asarray(samples[k], np.float64) for k in names], axis=1) if names \
+        else np.zeros((n, 0))
+    friction = (np.asarray(samples["friction"], np.float64) if "friction" in samples
+                else np.full(n, float(get_values(vehicle, params, ("friction",))[0])))
+    devices = jax.devices() if devices is None else list(devices)
+    rows, kept = [None] * n, []
+
+    def collect(start, stop, result):
+        for i in range(start, stop):
+            one = jax.tree.map(lambda x: x[i - start], result)
+            rows[i] = sample_row(one, friction[i], speed[i])
+        if keep_results:
+            kept.append(result)
+
+    compile_s, run_s = run_chunks((vehicle, track, params), (values, speed, shift), chunk,
+                                  devices, progress=progress, on_chunk=collect, names=names,
+                                  duration=duration, options=options)
+    table = {"sample": np.arange(n), "speed": speed.copy(), "misalignment": shift.copy()}
+    table |= {k: np.asarray(samples[k], np.float64) for k in names}
+    for key in rows[0]:
+        table[key] = np.array([row[key] for row in rows])
+    results = (jax.tree.map(lambda *xs: np.concatenate(xs), *kept) if keep_results else None)
+    return MonteCarlo(table, dict(samples), compile_s, run_s,
+                      chunk_size(chunk, n, len(devices)), len(devices), results=results)
+
+
+def run_montecarlo(scenario, variations, n: int, *, seed: int = 0, design: str = "latin",
+                   **kwargs) -> MonteCarlo:
+    """Draw ``n`` samples of ``variations`` (:class:`Variation` or their text) with
+    ``seed`` and ``design`` (:func:`.sampling.draw`) and run them (:func:`run_samples`,
+    whose keyword arguments pass through)."""
+    variations = [parse_variation(v) if isinstance(v, str) else v for v in variations]
+    check_names(variations, PARAMETERS)
+    samples = draw(variations, n, seed=seed, design=design)
+    result = run_samples(scenario, samples, **kwargs)
+    result.seed = seed
+    return result

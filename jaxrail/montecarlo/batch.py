@@ -1,0 +1,136 @@
+"""Many runs of one scenario at once: one vmapped simulation over a batch axis,
+sharded across devices, in chunks.
+
+Every sample has its own speed [m/s], initial misalignment [m] and values of named
+parameters (:mod:`jaxrail.identify.parameters`): the batch is the scenario's
+``VehicleParams`` with a leading batch axis, written by ``set_values`` inside the
+vmapped function. A chunk of K samples is one call of a compiled program; all chunks
+are padded to K (repeating the last sample, whose copies are dropped), so the program
+compiles once. With several devices the chunk is split over them with
+``jax.shard_map`` along the batch axis: each device integrates its own members with
+its own while loop, with no communication between devices.
+
+Members are independent: each has its own step sizes, derailment event and diffrax
+result code, so one sample that derails or diverges stops alone (its outputs after the
+stop are NaN and flagged not valid) and the others run on. The batched while loop
+runs until the last member is done, so a batch costs about its slowest member.
+
+Several hosts: call :func:`jax.distributed.initialize` first (``jaxrail montecarlo
+--distributed``); ``jax.devices()`` then lists every host's devices, the mesh spans
+them, and each host feeds the rows of the chunk that its own devices hold
+(docs/montecarlo.md has the commands).
+"""
+
+import time
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.sharding import NamedSharding, PartitionSpec
+
+from ..identify.parameters import set_values
+from ..simulate import DerailmentLimits, SolverOptions, _compile, solve
+
+AXIS = "batch"
+
+
+def batched_solve(vehicle, track, params, values, speed, misalignment, *, names, duration,
+                  options: SolverOptions, limits: DerailmentLimits = DerailmentLimits()):
+    """:func:`jaxrail.simulate.solve` of every sample: ``values`` (B, len(names)) of the
+    named parameters, ``speed`` (B,) [m/s], ``misalignment`` (B,) [m]; everything else
+    shared. Returns a SimulationResult with a leading batch axis B."""
+    def one(v, s, m):
+        p = set_values(vehicle, params, names, v) if names else params
+        return solve(vehicle, track, p, duration, s, m, options=options, limits=limits)
+
+    return jax.vmap(one)(values, speed, misalignment)
+
+
+def _sharded_solve(vehicle, track, params, values, speed, misalignment, *, devices,
+                   **static):
+    """:func:`batched_solve` with the batch split over ``devices`` (a tuple): each
+    device runs its rows alone (``jax.shard_map``), the model replicated."""
+    if len(devices) == 1:
+        return batched_solve(vehicle, track, params, values, speed, misalignment, **static)
+    model, fixed = eqx.partition((vehicle, track, params), eqx.is_array)
+    mesh = jax.sharding.Mesh(np.array(devices), (AXIS,))
+    rows = PartitionSpec(AXIS)
+
+    def local(model, values, speed, misalignment):
+        vehicle, track, params = eqx.combine(model, fixed)
+        return batched_solve(vehicle, track, params, values, speed, misalignment, **static)
+
+    return jax.shard_map(local, mesh=mesh, in_specs=(PartitionSpec(), rows, rows, rows),
+                         out_specs=rows, check_vma=False)(model, values, speed, misalignment)
+
+
+_sharded_jit = eqx.filter_jit(_sharded_solve)
+
+
+def _put(x, devices):
+    """``x`` (host, leading batch axis) as a global array split over ``devices``; on
+    several hosts each feeds the rows its own devices hold."""
+    devices = list(devices)
+    if len(devices) == 1:
+        return jax.device_put(jnp.asarray(x), devices[0])
+    sharding = NamedSharding(jax.sharding.Mesh(np.array(devices), (AXIS,)),
+                             PartitionSpec(AXIS))
+    if jax.process_count() == 1:
+        return jax.device_put(jnp.asarray(x), sharding)
+    return jax.make_array_from_callback(x.shape, sharding, lambda index: x[index])
+
+
+def _host(tree):
+    """A (possibly multi-host) result as NumPy on every host."""
+    if jax.process_count() == 1:
+        return jax.tree.map(np.asarray, tree)
+    from jax.experimental import multihost_utils
+
+    return jax.tree.map(np.asarray, multihost_utils.process_allgather(tree, tiled=True))
+
+
+def chunk_size(requested, n_samples, n_devices):
+    """The chunk actually used: ``requested`` (default: all samples, at most 64)
+    rounded up to a multiple of the number of devices."""
+    k = min(n_samples, 64) if requested is None else int(requested)
+    if k < 1:
+        raise ValueError(f"chunk must be >= 1, got {requested}")
+    return -(-k // n_devices) * n_devices
+
+
+def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None, **static):
+    """Run :func:`batched_solve` on ``model`` = (vehicle, track, params) and ``inputs`` =
+    (values, speed, misalignment) host arrays with a common leading axis N, in chunks
+    of ``chunk`` rows (the last one padded), sharded over ``devices`` (default: all);
+    ``static``: names, duration, options, limits. ``on_chunk(start, stop, result)``
+    receives each chunk's host result without the padding. The compiled program is
+    cached per structure, options and chunk (:func:`jaxrail.simulate.simulate`'s
+    cache): a second study of the same vehicle does not recompile. Returns (compile
+    time [s], 0 if cached; run time [s])."""
+    devices = tuple(jax.devices() if devices is None else devices)
+    n = len(inputs[0])
+    chunk = chunk_size(chunk, n, len(devices))
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=n, unit="sample", desc="montecarlo", ncols=100)
+    compile_s, run_s = 0.0, 0.0
+    for start in range(0, n, chunk):
+        stop = min(start + chunk, n)
+        rows = np.concatenate([np.arange(start, stop), np.full(chunk - (stop - start), stop - 1)])
+        args = model + tuple(_put(np.asarray(x)[rows], devices) for x in inputs)
+        compiled, seconds = _compile(_sharded_jit, *args, devices=devices, **static)
+        compile_s += seconds
+        t0 = time.perf_counter()
+        result = jax.block_until_ready(compiled(*args, devices=devices, **static))
+        run_s += time.perf_counter() - t0
+        host = jax.tree.map(lambda x: x[: stop - start], _host(result))
+        if on_chunk is not None:
+            on_chunk(start, stop, host)
+        if bar is not None:
+            bar.update(stop - start)
+    if bar is not None:
+        bar.close()
+    return compile_s, run_s
