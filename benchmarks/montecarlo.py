@@ -1,13 +1,15 @@
 """Throughput of a vmapped Monte Carlo batch against the same runs one after another,
-with 1 and 2 forced host devices (docs/montecarlo.md).
+on 1 and 2 host devices (docs/montecarlo.md).
 
 ``python benchmarks/montecarlo.py [--samples 64] [--duration 0.25] [--scenario S]``
 prints JSON: per device count, the compile and run times [s] of the batch (one
 compiled call of all samples, sharded over the devices) and of the sequential loop
 (the unbatched simulation compiled once, then called per sample), the throughputs in
 simulated seconds per wall second, their ratio, and the largest difference between
-the two runs' wheelset lateral displacements [m]. Each device count runs in its own
-process (XLA reads the host device count once, at start).
+the two runs' wheelset lateral displacements [m]. The measurement runs in a child
+process started with XLA_FLAGS=--xla_force_host_platform_device_count=2 (XLA reads
+the host device count once, at start); the batch runs there on the first device and
+then on both, the sequential loop once.
 """
 
 import argparse
@@ -18,7 +20,7 @@ import sys
 import time
 
 
-def measure(scenario_name, samples, duration, seed):
+def measure(scenario_name, samples, duration, seed, device_counts):
     import jax
     import numpy as np
 
@@ -34,8 +36,6 @@ def measure(scenario_name, samples, duration, seed):
     vehicle, params, track = built
     drawn = draw([parse_variation(f"speed={0.8 * scenario.speed}:{1.2 * scenario.speed}"),
                   parse_variation("misalignment=0:4e-3")], samples, seed=seed)
-    batch = run_samples(scenario, drawn, duration=duration, chunk=samples, built=built,
-                        keep_results=True)
     options = scenario.solver_options(duration=duration)
     one = jax.jit(lambda v, m: solve(vehicle, track, params, duration, v, m, options=options))
     start = time.perf_counter()
@@ -46,16 +46,22 @@ def measure(scenario_name, samples, duration, seed):
     for v, m in zip(drawn["speed"], drawn["misalignment"]):
         lateral.append(np.asarray(jax.block_until_ready(one(v, m)).wheelset_lateral))
     sequential_run = time.perf_counter() - start
-    difference = np.nanmax(np.abs(np.stack(lateral) - batch.results.wheelset_lateral))
     simulated = samples * duration
-    return {"devices": len(jax.devices()), "samples": samples, "duration_s": duration,
-            "scenario": scenario_name, "statuses": batch.statuses,
-            "batch_compile_s": batch.compile_time_s, "batch_run_s": batch.run_time_s,
-            "sequential_compile_s": sequential_compile, "sequential_run_s": sequential_run,
-            "batch_throughput": simulated / batch.run_time_s,
-            "sequential_throughput": simulated / sequential_run,
-            "batch_over_sequential": sequential_run / batch.run_time_s,
-            "max_lateral_difference_m": float(difference)}
+    report = {"scenario": scenario_name, "samples": samples, "duration_s": duration,
+              "host_devices": len(jax.devices()), "sequential_compile_s": sequential_compile,
+              "sequential_run_s": sequential_run,
+              "sequential_throughput": simulated / sequential_run, "batches": []}
+    for k in device_counts:
+        batch = run_samples(scenario, drawn, duration=duration, chunk=samples, built=built,
+                            keep_results=True, devices=jax.devices()[:k])
+        difference = np.nanmax(np.abs(np.stack(lateral) - batch.results.wheelset_lateral))
+        report["batches"].append({
+            "devices": k, "statuses": batch.statuses, "compile_s": batch.compile_time_s,
+            "run_s": batch.run_time_s, "throughput": simulated / batch.run_time_s,
+            "over_sequential": sequential_run / batch.run_time_s,
+            "max_lateral_difference_m": float(difference)})
+        print(json.dumps(report["batches"][-1]), file=sys.stderr, flush=True)
+    return report
 
 
 def main():
@@ -64,25 +70,24 @@ def main():
     parser.add_argument("--samples", type=int, default=64)
     parser.add_argument("--duration", type=float, default=0.25, help="[s] per sample")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--devices", type=int, nargs="*", default=[1, 2])
+    parser.add_argument("--devices", type=int, nargs="*", default=[1, 2],
+                        help="device counts to run the batch on (at most 2)")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
-        print(json.dumps(measure(args.scenario, args.samples, args.duration, args.seed)))
+        print(json.dumps(measure(args.scenario, args.samples, args.duration, args.seed,
+                                 args.devices)))
         return
-    runs = []
-    for n in args.devices:
-        env = dict(os.environ)
-        env["XLA_FLAGS"] = (env.get("XLA_FLAGS", "") +
-                            f" --xla_force_host_platform_device_count={n}").strip()
-        out = subprocess.run([sys.executable, __file__, "--child", "--scenario", args.scenario,
-                              "--samples", str(args.samples), "--duration", str(args.duration),
-                              "--seed", str(args.seed)], env=env, capture_output=True,
-                             text=True, check=True)
-        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
-        print(json.dumps(runs[-1]), file=sys.stderr, flush=True)
-    print(json.dumps({"benchmark": "montecarlo", "cores": os.cpu_count(), "runs": runs},
-                     indent=2))
+    env = dict(os.environ)
+    env["XLA_FLAGS"] = (env.get("XLA_FLAGS", "") +
+                        " --xla_force_host_platform_device_count=2").strip()
+    out = subprocess.run([sys.executable, __file__, "--child", "--scenario", args.scenario,
+                          "--samples", str(args.samples), "--duration", str(args.duration),
+                          "--seed", str(args.seed), "--devices", *map(str, args.devices)],
+                         env=env, stdout=subprocess.PIPE, text=True, check=True)
+    report = json.loads(out.stdout.strip().splitlines()[-1])
+    report = {"benchmark": "montecarlo", "cores": os.cpu_count()} | report
+    print(json.dumps(report, indent=2))
 
 
 if __name__ == "__main__":

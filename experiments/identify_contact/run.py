@@ -112,7 +112,7 @@ def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6)):
     print(json.dumps(report, indent=2))
 
 
-def fits(out: Path, which=("noise_free", "noisy"), max_iterations=25):
+def fits(out: Path, which=("noise_free", "noisy"), max_iterations=15):
     scenario = load_scenario(SCENARIO)
     built, clean = truth(scenario)
     rng = np.random.default_rng(SEED)
