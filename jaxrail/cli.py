@@ -236,6 +236,7 @@ def _montecarlo_command(args):
           f"chunks of {result.chunk}", file=sys.stderr)
     if jax.process_index() == 0:
         for path in args.out or ():
+            Path(path).parent.mkdir(parents=True, exist_ok=True)
             write_table(path, table)
             print(f"wrote {path}", file=sys.stderr)
         if args.plots:

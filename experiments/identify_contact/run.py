@@ -3,7 +3,8 @@ scenario from synthetic measurements (docs/identification.md).
 
 ``python experiments/identify_contact/run.py gradient OUT`` checks the gradient of the
 fit's loss with respect to five parameters (contact stiffness, friction, restitution,
-primary lateral stiffness, primary vertical damping) against central differences.
+primary lateral stiffness, primary vertical damping; ``--parameters a,b`` for fewer)
+against central differences (relative steps ``--steps``, default 1e-4,1e-5,1e-6).
 ``python experiments/identify_contact/run.py fit OUT`` fits stiffness and friction
 from initial guesses 30 % off, on noise-free and on noisy measurements.
 ``python experiments/identify_contact/run.py batch OUT`` checks that the gradient of a
@@ -45,6 +46,8 @@ SAMPLE_RATE = 100.0  # [Hz]
 FIT = ("contact_stiffness", "friction")
 GRADIENT = ("contact_stiffness", "friction", "restitution", "primary_lateral_stiffness",
             "primary_vertical_damping")
+OFF_GRADIENT = {"contact_stiffness": 1.3, "friction": 0.7, "restitution": 0.9,
+                "primary_lateral_stiffness": 1.2, "primary_vertical_damping": 0.8}
 OFF = np.array([1.3, 0.7])  # initial guesses: stiffness 30 % high, friction 30 % low
 SEED = 2026
 
@@ -64,18 +67,18 @@ def truth(scenario):
                                                   np.array(list(CHANNELS.values())))
 
 
-def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6)):
+def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6), names=GRADIENT):
     scenario = load_scenario(SCENARIO)
     built, measured = truth(scenario)
     vehicle, params, track = built
     residuals = simulation_residuals(
-        vehicle, params, track, GRADIENT, measured, speed=scenario.speed,
+        vehicle, params, track, names, measured, speed=scenario.speed,
         misalignment=scenario.misalignment, duration=scenario.duration,
         options=scenario.solver_options())
     data = jnp.asarray(measured.values)
     loss = lambda v: 0.5 * jnp.sum(residuals(v, data) ** 2)  # noqa: E731
-    truth_values = np.asarray(get_values(vehicle, params, GRADIENT))
-    at = truth_values * np.array([1.3, 0.7, 0.9, 1.2, 0.8])
+    truth_values = np.asarray(get_values(vehicle, params, names))
+    at = truth_values * np.array([OFF_GRADIENT[n] for n in names])
     start = time.perf_counter()
     value_and_grad = jax.jit(jax.value_and_grad(loss)).lower(jnp.asarray(at)).compile()
     grad_compile = time.perf_counter() - start
@@ -85,7 +88,7 @@ def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6)):
     start = time.perf_counter()
     forward = jax.jit(loss).lower(jnp.asarray(at)).compile()
     forward_compile = time.perf_counter() - start
-    report = {"scenario": SCENARIO, "parameters": list(GRADIENT), "at": at.tolist(),
+    report = {"scenario": SCENARIO, "parameters": list(names), "at": at.tolist(),
               "truth": truth_values.tolist(), "loss": float(value),
               "gradient": np.asarray(grad).tolist(), "gradient_compile_s": grad_compile,
               "gradient_run_s": grad_run, "forward_compile_s": forward_compile,
@@ -93,9 +96,9 @@ def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6)):
     forward_runs = []
     for step in steps:
         fd = []
-        for i in range(len(GRADIENT)):
+        for i in range(len(names)):
             h = step * at[i]
-            e = np.zeros(len(GRADIENT))
+            e = np.zeros(len(names))
             e[i] = h
             t0 = time.perf_counter()
             up, down = float(forward(jnp.asarray(at + e))), float(forward(jnp.asarray(at - e)))
@@ -189,10 +192,15 @@ def main():
     parser.add_argument("out", type=Path)
     parser.add_argument("--only", choices=("noise_free", "noisy"),
                         help="fit: only this data set")
+    parser.add_argument("--parameters", default=",".join(GRADIENT),
+                        help="gradient: the parameters (default: all five)")
+    parser.add_argument("--steps", default="1e-4,1e-5,1e-6",
+                        help="gradient: relative steps of the differences")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     if args.what == "gradient":
-        gradient_check(args.out)
+        gradient_check(args.out, tuple(float(h) for h in args.steps.split(",")),
+                       tuple(args.parameters.split(",")))
     elif args.what == "batch":
         batch_check(args.out)
     else:

@@ -1,4 +1,4 @@
-"""Monte Carlo study: the bogie in the paper's 300 m curve (its first second) over speed
+"""Monte Carlo study: the bogie entering the paper's 300 m curve (shortened) over speed
 10-25 m/s and initial misalignment 0-5 mm (docs/montecarlo.md).
 
 ``XLA_FLAGS=--xla_force_host_platform_device_count=2 python
@@ -33,7 +33,7 @@ def main():
     parser.add_argument("--samples", type=int, default=128)
     parser.add_argument("--chunk", type=int, default=64)
     parser.add_argument("--seed", type=int, default=2026)
-    parser.add_argument("--duration", type=float, help="[s] (default: the scenario's 1 s)")
+    parser.add_argument("--duration", type=float, help="[s] (default: the scenario's 1.5 s)")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     scenario = load_scenario(HERE / "bogie-curve.toml")
