@@ -192,6 +192,7 @@ def main():
     parser.add_argument("out", type=Path)
     parser.add_argument("--only", choices=("noise_free", "noisy"),
                         help="fit: only this data set")
+    parser.add_argument("--iterations", type=int, default=15, help="fit: maximum iterations")
     parser.add_argument("--parameters", default=",".join(GRADIENT),
                         help="gradient: the parameters (default: all five)")
     parser.add_argument("--steps", default="1e-4,1e-5,1e-6",
@@ -204,7 +205,8 @@ def main():
     elif args.what == "batch":
         batch_check(args.out)
     else:
-        fits(args.out, (args.only,) if args.only else ("noise_free", "noisy"))
+        fits(args.out, (args.only,) if args.only else ("noise_free", "noisy"),
+             max_iterations=args.iterations)
 
 
 if __name__ == "__main__":
