@@ -217,7 +217,7 @@ def _montecarlo_command(args):
         if Path(path).suffix.lower() not in (".csv", ".parquet"):
             raise ValueError(f"--out {path}: the suffix must be .csv or .parquet")
     variations = [parse_variation(v) for v in args.vary or ()]
-    check_names(variations, PARAMETERS)
+    check_names([v.name for v in variations], PARAMETERS)
     scenario = load_scenario(args.scenario)
     duration = scenario.duration if args.duration is None else args.duration
     import jax
@@ -232,7 +232,7 @@ def _montecarlo_command(args):
     table = result.table
     n = len(table["status"])
     print(f"{result.statuses} in {result.run_time_s:.1f} s (+ {result.compile_time_s:.1f} s "
-          f"compiling), {n * duration / result.run_time_s:.3g} simulated s per wall s, "
+          f"compiling), {result.throughput(duration):.3g} simulated s per wall s, "
           f"chunks of {result.chunk}", file=sys.stderr)
     if jax.process_index() == 0:
         for path in args.out or ():

@@ -59,7 +59,7 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
     to reuse."""
     import jax
 
-    check_names([Variation(k, "choice", (0.0,)) for k in samples], PARAMETERS)
+    check_names(samples, PARAMETERS)
     lengths = {k: len(np.atleast_1d(v)) for k, v in samples.items()}
     if len(set(lengths.values())) > 1:
         raise ValueError(f"samples: every input needs the same number of values, got {lengths}")
@@ -103,7 +103,6 @@ def run_montecarlo(scenario, variations, n: int, *, seed: int = 0, design: str =
     ``seed`` and ``design`` (:func:`.sampling.draw`) and run them (:func:`run_samples`,
     whose keyword arguments pass through)."""
     variations = [parse_variation(v) if isinstance(v, str) else v for v in variations]
-    check_names(variations, PARAMETERS)
     samples = draw(variations, n, seed=seed, design=design)
     result = run_samples(scenario, samples, **kwargs)
     result.seed = seed

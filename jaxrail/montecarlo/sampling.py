@@ -91,10 +91,10 @@ def parse_variation(text: str) -> Variation:
         raise ValueError(f"--vary {text!r}: {error}") from None
 
 
-def check_names(variations, parameter_names) -> None:
-    """ValueError for unknown or repeated names (``parameter_names``: the fittable
-    parameters, :data:`jaxrail.identify.PARAMETERS`)."""
-    names = [v.name for v in variations]
+def check_names(names, parameter_names) -> None:
+    """ValueError for unknown or repeated input ``names`` (``parameter_names``: the
+    fittable parameters, :data:`jaxrail.identify.PARAMETERS`)."""
+    names = list(names)
     if len(set(names)) != len(names):
         raise ValueError(f"--vary: each input once, got {names}")
     known = set(BOUNDARY_INPUTS) | set(parameter_names)
