@@ -44,11 +44,11 @@ def _adjoint(options: SolverOptions, forward: bool, override=None):
 
 def simulate_channels(vehicle, params, track, channels, times, *, speed, misalignment,
                       duration, options: SolverOptions, s0=None, adjoint=None):
-    """Simulated channels (M, C) at the equally spaced ``times`` (M,) [s] as an
-    acquisition sees them (traceable, differentiable): the simulation's outputs at
-    ``OVERSAMPLING`` times the sample rate (more if ``options`` asks), averaged through
-    the anti-aliasing window of :func:`.measurements.sample` (half-width: one sample
-    period)."""
+    """Simulated channels (M, C) at ``times`` (M,) [s] as an acquisition sees them
+    (traceable, differentiable): the simulation's outputs at ``OVERSAMPLING`` times the
+    sample rate (more if ``options`` asks), averaged through the anti-aliasing window
+    of :func:`.measurements.sample` with a half-width of one sample period (the mean
+    spacing of ``times``)."""
     times = np.asarray(times, dtype=np.float64)
     period = (times[-1] - times[0]) / (len(times) - 1) if len(times) > 1 else duration
     n_outputs = int(round(duration / period * OVERSAMPLING)) + 1
