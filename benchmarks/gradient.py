@@ -5,13 +5,15 @@ from 0.6 s); loss: the whitened least squares of experiments/identify_contact ag
 its own noise-free truth, at parameters 10 % off; gradient with respect to the contact
 stiffness scale and the friction coefficient by reverse mode through diffrax.
 
-Two adjoints: recursive checkpointing with one checkpoint per step (``per_step``: no
-recomputation, memory grows with the steps) and diffrax's default number of
-checkpoints for ``max_steps`` (``default``: memory bounded, recomputes). Prints JSON:
+Three ways: reverse mode with recursive checkpointing, one checkpoint per step
+(``per_step``: no recomputation, memory grows with the steps) or diffrax's default
+number of checkpoints for ``max_steps`` (``default``: memory bounded, recomputes); and
+forward mode (``forward``: one Jacobian-vector product per parameter through diffrax's
+``ForwardMode``, the gradient J^T r; what the fits of a few parameters use). Prints JSON:
 compile times, median run times of ``--repeats`` runs, the ratio gradient / forward,
 and XLA's memory analysis of each compiled program (arguments + outputs + temporaries)
 with the process's peak resident memory.
-Usage: ``python benchmarks/gradient.py [--repeats 3] [--adjoints per_step,default]``.
+Usage: ``python benchmarks/gradient.py [--repeats 3] [--adjoints per_step,default,forward]``.
 """
 
 import argparse
@@ -36,6 +38,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "experiments",
 from run import CHANNELS, FIT, SCENARIO, truth  # noqa: E402
 
 from jaxrail.identify import get_values, simulation_residuals  # noqa: E402
+from jaxrail.identify.fit import residuals_and_jacobian  # noqa: E402
 from jaxrail.scenarios import load_scenario  # noqa: E402
 
 
@@ -43,6 +46,12 @@ def compiled(function, x):
     start = time.perf_counter()
     program = jax.jit(function).lower(x).compile()
     return program, time.perf_counter() - start
+
+
+def forward_loss_and_gradient(residuals, values, data):
+    """0.5 |r|^2 and its gradient in log v, J^T r, by forward mode."""
+    r, jacobian = residuals_and_jacobian(residuals, values, data)
+    return 0.5 * jnp.sum(r ** 2), jacobian.T @ r
 
 
 def median_time(program, x, repeats):
@@ -68,7 +77,7 @@ def memory(program):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--adjoints", default="per_step,default")
+    parser.add_argument("--adjoints", default="per_step,default,forward")
     args = parser.parse_args()
     scenario = load_scenario(SCENARIO)
     (vehicle, params, track), measured = truth(scenario)
@@ -90,12 +99,18 @@ def main():
                          "run_s": forward_times, "memory": memory(forward)}
     print(json.dumps(report["forward"]), file=sys.stderr, flush=True)
     for name in args.adjoints.split(","):
-        adjoint = (diffrax.RecursiveCheckpointAdjoint(checkpoints=options.max_steps)
-                   if name == "per_step" else diffrax.RecursiveCheckpointAdjoint())
-        residuals = simulation_residuals(vehicle, params, track, FIT, measured,
-                                         adjoint=adjoint, **common)
-        gradient, gradient_compile = compiled(
-            jax.value_and_grad(lambda v, r=residuals: 0.5 * jnp.sum(r(v, data) ** 2)), x)
+        if name == "forward":
+            residuals = simulation_residuals(vehicle, params, track, FIT, measured,
+                                             forward=True, **common)
+            gradient, gradient_compile = compiled(
+                lambda v, r=residuals: forward_loss_and_gradient(r, v, data), x)
+        else:
+            adjoint = (diffrax.RecursiveCheckpointAdjoint(checkpoints=options.max_steps)
+                       if name == "per_step" else diffrax.RecursiveCheckpointAdjoint())
+            residuals = simulation_residuals(vehicle, params, track, FIT, measured,
+                                             adjoint=adjoint, **common)
+            gradient, gradient_compile = compiled(
+                jax.value_and_grad(lambda v, r=residuals: 0.5 * jnp.sum(r(v, data) ** 2)), x)
         gradient_time, gradient_times = median_time(gradient, x, args.repeats)
         report["adjoints"][name] = {
             "compile_s": gradient_compile, "run_s_median": gradient_time,

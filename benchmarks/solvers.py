@@ -14,7 +14,6 @@ import json
 import os
 
 import diffrax
-import numpy as np
 
 from jaxrail import enable_float64
 

@@ -169,6 +169,8 @@ def _identify_command(args):
     from .identify import identify, read_measurements
     from .scenarios import load_scenario
 
+    if args.cutoff is not None and not args.cutoff > 0.0:
+        raise ValueError(f"--cutoff must be > 0 Hz, got {args.cutoff}")
     scenario = load_scenario(args.scenario)
     measurements = read_measurements(args.measured)
     names = [n.strip() for n in args.fit.split(",") if n.strip()]
@@ -182,7 +184,7 @@ def _identify_command(args):
           "(compiling the simulation and its gradient first) ...", file=sys.stderr)
     result = identify(scenario, measurements, names, initial=initial, bounds=bounds,
                       method=args.method, max_iterations=args.iterations,
-                      progress=not args.quiet)
+                      progress=not args.quiet, cutoff=args.cutoff)
     summary = result.as_dict()
     summary["scenario"] = scenario.name
     for name, entry in summary["parameters"].items():
@@ -323,6 +325,9 @@ def build_parser():
                                         "10 either side of the initial guess)")
     ident.add_argument("--method", choices=("lbfgs", "adam"), default="lbfgs")
     ident.add_argument("--iterations", type=int, default=30, help="maximum iterations")
+    ident.add_argument("--cutoff", type=float,
+                       help="low-pass cutoff [Hz] the measured channels were filtered with "
+                            "(default: a fifth of their sample rate)")
     ident.add_argument("--out", help="write the JSON result here (default: stdout)")
     ident.add_argument("--plot", help="write a PNG of the loss, parameters and channels")
     ident.add_argument("--quiet", action="store_true", help="no progress bar")

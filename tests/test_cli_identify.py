@@ -34,6 +34,7 @@ def measured(tmp_path):
     (("--fit", "friction", "--initial", "friction"), "--initial: expected name=value"),
     (("--fit", "friction", "--bounds", "friction=0.1"), "--bounds: expected name=lower:upper"),
     (("--fit", "friction", "--initial", "contact_stiffness=2"), "not fitted"),
+    (("--fit", "friction", "--cutoff", "0"), "--cutoff must be > 0 Hz"),
 ])
 def test_bad_arguments_are_named(measured, args, message):
     done = run("bogie-curve-entry", "--measured", str(measured), *args)

@@ -27,6 +27,7 @@ from jaxrail import enable_float64
 
 enable_float64()
 
+from jaxrail.identify.fit import jacobian_by_jvp  # noqa: E402
 from jaxrail.identify import (Measurements, get_values, identify,  # noqa: E402
                               set_values, simulate_channels, simulation_residuals,
                               write_measurements)
@@ -67,20 +68,28 @@ def truth(scenario):
                                                   np.array(list(CHANNELS.values())))
 
 
-def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6), names=GRADIENT):
+def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6), names=GRADIENT, mode="reverse"):
     scenario = load_scenario(SCENARIO)
     built, measured = truth(scenario)
     vehicle, params, track = built
-    residuals = simulation_residuals(
-        vehicle, params, track, names, measured, speed=scenario.speed,
-        misalignment=scenario.misalignment, duration=scenario.duration,
-        options=scenario.solver_options())
+    common = dict(speed=scenario.speed, misalignment=scenario.misalignment,
+                  duration=scenario.duration, options=scenario.solver_options())
+    residuals = simulation_residuals(vehicle, params, track, names, measured, **common)
     data = jnp.asarray(measured.values)
     loss = lambda v: 0.5 * jnp.sum(residuals(v, data) ** 2)  # noqa: E731
+    if mode == "forward":  # J^T r with J by one forward-mode product per parameter
+        forward = simulation_residuals(vehicle, params, track, names, measured, forward=True,
+                                       **common)
+
+        def loss_and_gradient(v):
+            r, jacobian = jacobian_by_jvp(lambda v: forward(v, data), v)
+            return 0.5 * jnp.sum(r ** 2), jacobian.T @ r
+    else:
+        loss_and_gradient = jax.value_and_grad(loss)
     truth_values = np.asarray(get_values(vehicle, params, names))
     at = truth_values * np.array([OFF_GRADIENT[n] for n in names])
     start = time.perf_counter()
-    value_and_grad = jax.jit(jax.value_and_grad(loss)).lower(jnp.asarray(at)).compile()
+    value_and_grad = jax.jit(loss_and_gradient).lower(jnp.asarray(at)).compile()
     grad_compile = time.perf_counter() - start
     start = time.perf_counter()
     value, grad = jax.block_until_ready(value_and_grad(jnp.asarray(at)))
@@ -88,7 +97,7 @@ def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6), names=GRADIENT):
     start = time.perf_counter()
     forward = jax.jit(loss).lower(jnp.asarray(at)).compile()
     forward_compile = time.perf_counter() - start
-    report = {"scenario": SCENARIO, "parameters": list(names), "at": at.tolist(),
+    report = {"scenario": SCENARIO, "mode": mode, "parameters": list(names), "at": at.tolist(),
               "truth": truth_values.tolist(), "loss": float(value),
               "gradient": np.asarray(grad).tolist(), "gradient_compile_s": grad_compile,
               "gradient_run_s": grad_run, "forward_compile_s": forward_compile,
@@ -111,7 +120,8 @@ def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6), names=GRADIENT):
         print(json.dumps(report["central_differences"][str(step)]), flush=True)
     report["forward_run_s_median"] = float(np.median(forward_runs))
     report["gradient_over_forward"] = grad_run / float(np.median(forward_runs))
-    (out / "gradient_check.json").write_text(json.dumps(report, indent=2) + "\n")
+    name = "gradient_check.json" if mode == "reverse" else "gradient_check_forward.json"
+    (out / name).write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2))
 
 
@@ -197,11 +207,13 @@ def main():
                         help="gradient: the parameters (default: all five)")
     parser.add_argument("--steps", default="1e-4,1e-5,1e-6",
                         help="gradient: relative steps of the differences")
+    parser.add_argument("--mode", choices=("reverse", "forward"), default="reverse",
+                        help="gradient: by reverse mode or by forward mode (J^T r)")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     if args.what == "gradient":
         gradient_check(args.out, tuple(float(h) for h in args.steps.split(",")),
-                       tuple(args.parameters.split(",")))
+                       tuple(args.parameters.split(",")), args.mode)
     elif args.what == "batch":
         batch_check(args.out)
     else:

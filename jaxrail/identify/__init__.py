@@ -4,9 +4,10 @@
 scenario with trial values of the named parameters (:mod:`.parameters`), compares the
 measured channels (:mod:`.measurements`) with the simulated ones, and fits the values
 by weighted least squares with optax in bounded log space, gradients through the whole
-simulation by reverse-mode AD with recursive checkpointing (:mod:`.fit`). The
-uncertainty is the Gauss-Newton one at the optimum; per channel, the same from that
-channel alone tells which measurement identifies which parameter.
+simulation by AD (forward mode for up to ``FORWARD_MODE_PARAMETERS`` parameters, else
+reverse mode with recursive checkpointing), closing with Gauss-Newton steps
+(:mod:`.fit`). The uncertainty is the Gauss-Newton one at the optimum; per channel,
+the same from that channel alone tells which measurement identifies which parameter.
 """
 
 import dataclasses
@@ -16,9 +17,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..simulate import SolverOptions, solve
-from .fit import FitResult, channel_standard_errors, least_squares
-from .measurements import (Measurements, channel_values, check_channels, read_measurements,
-                           sample, write_measurements)
+from .fit import POLISH_ITERATIONS, FitResult, channel_standard_errors, least_squares
+from .measurements import (Measurements, channel_values, check_channels,
+                           gaussian_window, read_measurements, sample, write_measurements)
 from .parameters import PARAMETERS, get_values, parameter, set_values
 
 __all__ = ["FitResult", "Identification", "Measurements", "PARAMETERS", "channel_values",
@@ -26,9 +27,16 @@ __all__ = ["FitResult", "Identification", "Measurements", "PARAMETERS", "channel
            "set_values", "simulate_channels", "simulation_residuals", "write_measurements"]
 
 
-# Simulation outputs per measurement sample period: enough for the anti-aliasing window
-# to see a wheel-rail contact ringing (~100-300 Hz at 100 Hz sampling) as such.
+# Simulation outputs per measurement sample period: the acquisition filter then sees a
+# wheel-rail contact ringing (~100-300 Hz at 100 Hz sampling) as such.
 OVERSAMPLING = 8
+# Default low-pass cutoff of the acquisition, as a fraction of the sample rate: 20 Hz at
+# 100 Hz, the wheel-rail force filter of EN 14363. The Gaussian filter passes 1.3 % at
+# the Nyquist frequency and nothing measurable of the contact ringing.
+CUTOFF_FRACTION = 0.2
+# Fits of up to this many parameters take their gradients by forward mode (one product
+# per parameter), more by one reverse pass (benchmarks/gradient.py).
+FORWARD_MODE_PARAMETERS = 3
 
 
 def _adjoint(options: SolverOptions, forward: bool, override=None):
@@ -42,32 +50,39 @@ def _adjoint(options: SolverOptions, forward: bool, override=None):
     return diffrax.RecursiveCheckpointAdjoint()
 
 
+def sample_period(times) -> float:
+    """Mean spacing [s] of the sample times (M,), M >= 2."""
+    times = np.asarray(times, dtype=np.float64)
+    return float(times[-1] - times[0]) / (len(times) - 1)
+
+
 def simulate_channels(vehicle, params, track, channels, times, *, speed, misalignment,
-                      duration, options: SolverOptions, s0=None, adjoint=None):
+                      duration, options: SolverOptions, s0=None, adjoint=None, cutoff=None):
     """Simulated channels (M, C) at ``times`` (M,) [s] as an acquisition sees them
     (traceable, differentiable): the simulation's outputs at ``OVERSAMPLING`` times the
-    sample rate (more if ``options`` asks), averaged through the anti-aliasing window
-    of :func:`.measurements.sample` with a half-width of one sample period (the mean
-    spacing of ``times``)."""
-    times = np.asarray(times, dtype=np.float64)
-    period = (times[-1] - times[0]) / (len(times) - 1) if len(times) > 1 else duration
+    sample rate (more if ``options`` asks) through the Gaussian low-pass filter of
+    :func:`.measurements.gaussian_window` with ``cutoff`` [Hz] (default
+    ``CUTOFF_FRACTION`` times the sample rate, the inverse of the times' mean spacing)."""
+    period = sample_period(times)
+    cutoff = CUTOFF_FRACTION / period if cutoff is None else cutoff
     n_outputs = int(round(duration / period * OVERSAMPLING)) + 1
     options = dataclasses.replace(options, n_outputs=max(options.n_outputs, n_outputs))
     result = solve(vehicle, track, params, duration, speed, misalignment, s0, options=options,
                    adjoint=adjoint)
     values = channel_values(channels, vehicle, params, track, result)
-    return sample(result.t, values, jnp.asarray(times), width=period)
+    return sample(result.t, values, jnp.asarray(times), gaussian_window(cutoff))
 
 
 def simulation_residuals(vehicle, params, track, names, measurements: Measurements, *,
                          speed, misalignment, duration, options: SolverOptions, s0=None,
-                         forward=False, adjoint=None):
+                         forward=False, adjoint=None, cutoff=None):
     """``(values (k,), measured (M, C)) -> r (M C,)``: whitened residuals (simulated -
     measured) / noise, sample-major, of the simulation with the named parameters set
     to ``values``.
     ``forward``: use diffrax's forward-mode adjoint (for ``jax.jacfwd``) instead of
     recursive checkpointing (for ``jax.grad``; with fixed steps one checkpoint per step,
-    else diffrax's default; ``adjoint`` overrides it). Samples after an early stop
+    else diffrax's default; ``adjoint`` overrides it). ``cutoff`` [Hz]: the
+    acquisition's low-pass (:func:`simulate_channels`). Samples after an early stop
     (derailed, failed) count as 1e3 noise levels off."""
     check_channels(measurements.channels, vehicle)
     for name in names:
@@ -83,7 +98,8 @@ def simulation_residuals(vehicle, params, track, names, measurements: Measuremen
         simulated = simulate_channels(vehicle, trial, track, measurements.channels,
                                       measurements.time, speed=speed,
                                       misalignment=misalignment, duration=duration,
-                                      options=options, s0=s0, adjoint=adjoint)
+                                      options=options, s0=s0, adjoint=adjoint,
+                                      cutoff=cutoff)
         finite = jnp.isfinite(simulated)
         r = (jnp.where(finite, simulated, 0.0) - measured) / noise
         return jnp.where(finite, r, 1e3).ravel()
@@ -134,12 +150,14 @@ def _residual_functions(vehicle, params, track, names, measurements, common):
 
 def identify(scenario, measurements: Measurements, names, initial=None, bounds=None,
              method="lbfgs", max_iterations=30, tolerance=1e-9, progress=False,
-             built=None) -> Identification:
+             built=None, cutoff=None) -> Identification:
     """Fit the named parameters of ``scenario`` (:class:`jaxrail.scenarios.Scenario`)
     to ``measurements``.
 
     initial: {name: value} (default: the scenario's values); bounds: {name: (lo, hi)}
     (default a factor 10 either side of the initial value); method: "lbfgs" or "adam";
+    cutoff: the low-pass cutoff [Hz] the measured channels were filtered with (default
+    ``CUTOFF_FRACTION`` times their sample rate; :func:`simulate_channels`);
     progress: show a tqdm bar with the loss; built: ``(vehicle, params, track)`` if
     already built.
     """
@@ -158,14 +176,15 @@ def identify(scenario, measurements: Measurements, names, initial=None, bounds=N
     upper = np.array([limits[n][1] for n in names])
     options = scenario.solver_options()
     common = dict(speed=scenario.speed, misalignment=scenario.misalignment,
-                  duration=scenario.duration, options=options)
+                  duration=scenario.duration, options=options, cutoff=cutoff)
     residuals, forward = _residual_functions(vehicle, params, track, names, measurements,
                                              common)
     bar = None
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=max_iterations, desc="identify", unit="it", ncols=160)
+        bar = tqdm(total=max_iterations + POLISH_ITERATIONS, desc="identify", unit="it",
+                   ncols=160)
 
     def report(iteration, loss, values):
         if bar is not None:
@@ -178,7 +197,9 @@ def identify(scenario, measurements: Measurements, names, initial=None, bounds=N
         fit = least_squares(residuals, names, x0, lower, upper,
                             data=jnp.asarray(measurements.values), method=method,
                             max_iterations=max_iterations, tolerance=tolerance,
-                            jacobian_residuals=forward, progress=report)
+                            jacobian_residuals=forward, progress=report,
+                            gradient=("forward" if len(names) <= FORWARD_MODE_PARAMETERS
+                                      else "reverse"))
     finally:
         if bar is not None:
             bar.close()

@@ -32,6 +32,26 @@ def test_recovers_truth_from_30_percent_off(method, iterations):
     assert np.all((fit.value_history > TRUTH / 10) & (fit.value_history < TRUTH * 10))
 
 
+def test_forward_mode_gradient_follows_the_reverse_mode_path():
+    """The fit with forward-mode gradients (k products) takes the same steps as with
+    reverse mode, and its first gradient matches central differences of the loss."""
+    start = TRUTH * [1.3, 0.7]
+    fits = [least_squares(decay_residuals, ("a", "k"), start, TRUTH / 10, TRUTH * 10,
+                          data=clean(), max_iterations=40, gradient=mode)
+            for mode in ("reverse", "forward")]
+    assert len(fits[0].loss_history) == len(fits[1].loss_history)
+    assert np.allclose(fits[0].value_history, fits[1].value_history, rtol=1e-9)
+
+    from jaxrail.identify.fit import _compiled, _transform
+    bounds = (jnp.asarray(TRUTH / 10), jnp.asarray(TRUTH * 10))
+    _, gradient, residuals_z, _ = _compiled(decay_residuals, "lbfgs", 0.1, decay_residuals)
+    z = _transform(*bounds)[1](jnp.asarray(start))
+    loss = lambda z: 0.5 * np.sum(np.asarray(residuals_z(z, bounds, clean())) ** 2)  # noqa: E731
+    h = 1e-6
+    central = [(loss(z + h * e) - loss(z - h * e)) / (2 * h) for e in np.eye(2)]
+    assert np.allclose(gradient(z, bounds, clean())[1], central, rtol=1e-6)
+
+
 def test_standard_errors_match_monte_carlo_scatter():
     rng = np.random.default_rng(0)
     estimates, chi2 = [], []
@@ -46,6 +66,42 @@ def test_standard_errors_match_monte_carlo_scatter():
     # 150 samples: the scatter's own relative uncertainty is about 6 %
     assert np.allclose(fit.standard_error, scatter, rtol=0.2)
     assert abs(np.mean(chi2) - 1.0) < 0.05
+
+
+RIPPLE = 1e-3  # amplitude of the rough model's ripple, 0.1 noise level
+PERIOD = 2e-3  # its period in the decay rate, far below the rate's standard error
+
+
+def rough_residuals(values, data):
+    """The decay plus a fast ripple in the parameter, like the ringing after a wheel-rail
+    impact shifting with the contact stiffness."""
+    ripple = RIPPLE * jnp.sin(2 * jnp.pi * values[1] / PERIOD) * jnp.cos(7.0 * T)
+    return (values[0] * jnp.exp(-values[1] * T) + ripple - data) / SIGMA
+
+
+def test_standard_errors_match_scatter_on_a_rough_loss():
+    """On a loss with a fast ripple the local (AD) errors are several times too small and
+    the optax iterations alone stop in the ripple's minima far from the optimum; the
+    closing Gauss-Newton steps with central differences bring the scatter of the
+    fitted values down to their standard errors."""
+    rng = np.random.default_rng(0)
+    clean = rough_residuals(jnp.asarray(TRUTH), 0.0) * SIGMA
+    estimates, raw, errors, local = [], [], [], []
+    for _ in range(150):
+        data = clean + SIGMA * rng.standard_normal(T.shape)
+        fit = least_squares(rough_residuals, ("a", "k"), TRUTH * [1.3, 0.7], TRUTH / 10,
+                            TRUTH * 10, data=data, max_iterations=60)
+        assert fit.converged
+        estimates.append(fit.values)
+        errors.append(fit.standard_error)
+        local.append(fit.local_standard_error)
+        raw.append(least_squares(rough_residuals, ("a", "k"), TRUTH * [1.3, 0.7],
+                                 TRUTH / 10, TRUTH * 10, data=data, max_iterations=60,
+                                 polish_iterations=0).values)
+    scatter = np.std(estimates, axis=0, ddof=1)
+    assert np.allclose(np.median(errors, axis=0), scatter, rtol=0.2)
+    assert np.median(local, axis=0)[1] < 0.3 * scatter[1]
+    assert np.all(np.std(raw, axis=0, ddof=1) > 3.0 * scatter)
 
 
 def test_linear_model_covariance_is_exact():
@@ -71,6 +127,9 @@ def test_bad_input_is_named():
     with pytest.raises(ValueError, match="method"):
         least_squares(decay_residuals, ("a", "k"), [2.0, 1.0], [1.0, 0.5], [3.0, 3.0],
                       data=clean(), method="newton")
+    with pytest.raises(ValueError, match="gradient must be"):
+        least_squares(decay_residuals, ("a", "k"), [2.0, 1.0], [1.0, 0.5], [3.0, 3.0],
+                      data=clean(), gradient="central")
 
 
 def test_batched_loss_gradient_is_the_sum_of_member_gradients():

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from jaxrail.identify import Measurements, read_measurements, write_measurements
-from jaxrail.identify.measurements import check_channels, sample
+from jaxrail.identify.measurements import (check_channels, gaussian_window, sample,
+                                          triangular_window)
 from jaxrail.vehicles import bogie
 
 CHANNELS = ("wheelset_lateral_1", "wheel_vertical_force_2_right", "lateral_acceleration_frame")
@@ -63,26 +64,39 @@ def test_sampling_interpolates_linearly_between_outputs():
     assert np.allclose(out[1, 1], 0.25)
 
 
-def test_acquisition_window_passes_slow_signals_and_removes_ringing_above_nyquist():
-    """Sampled at 100 Hz from outputs at 800 Hz with the one-period window: a 2 Hz
-    signal keeps its amplitude within 1.5 % (sinc^2(0.02) = 0.9987, plus the discrete
-    window), a 170 Hz ringing (aliased to 30 Hz by plain sampling) drops below 3 %."""
+def test_gaussian_low_pass_has_its_analytic_response():
+    """Sampled at 100 Hz from outputs at 800 Hz through the 20 Hz Gaussian: sines of
+    2, 10 and 20 Hz keep the amplitude exp(-ln 2 (f / 20)^2) (0.993, 0.841, 0.5), a
+    170 Hz ringing (aliased to 30 Hz by plain sampling) is gone."""
     t = np.linspace(0.0, 1.0, 801)
     times = np.linspace(0.0, 1.0, 101)
-    slow = np.sin(2 * np.pi * 2.0 * t)
+    inner = slice(5, -5)  # the window is cut at the ends
+    for f in (2.0, 10.0, 20.0):
+        out = np.asarray(sample(t, np.sin(2 * np.pi * f * t)[:, None], times,
+                                gaussian_window(20.0)))[inner, 0]
+        gain = np.exp(-np.log(2.0) * (f / 20.0) ** 2)
+        assert np.max(np.abs(out - gain * np.sin(2 * np.pi * f * times[inner]))) < 2e-3
     ringing = np.sin(2 * np.pi * 170.0 * t + 0.3)
-    out = np.asarray(sample(t, np.stack([slow, ringing], axis=1), times, width=0.01))
-    inner = slice(2, -2)  # the window is cut at the ends
-    assert np.max(np.abs(out[inner, 0] - np.sin(2 * np.pi * 2.0 * times[inner]))) < 0.015
     plain = np.asarray(sample(t, ringing[:, None], times))[:, 0]
     assert np.max(np.abs(plain)) > 0.9  # plain sampling keeps the full ringing, aliased
-    assert np.max(np.abs(out[inner, 1])) < 0.03
+    out = np.asarray(sample(t, ringing[:, None], times, gaussian_window(20.0)))[inner, 0]
+    assert np.max(np.abs(out)) < 1e-6
+
+
+def test_low_pass_keeps_a_constant_at_the_ends_and_rejects_a_bad_cutoff():
+    t = np.linspace(0.0, 1.0, 801)
+    out = np.asarray(sample(t, np.full((801, 1), 3.0), np.linspace(0.0, 1.0, 11),
+                            gaussian_window(20.0)))
+    assert np.allclose(out, 3.0)
+    with pytest.raises(ValueError, match="cutoff must be > 0"):
+        gaussian_window(0.0)
 
 
 def test_a_nan_output_spoils_only_the_samples_whose_window_reaches_it():
     t = np.linspace(0.0, 1.0, 81)
     values = np.ones((81, 1))
     values[60:] = np.nan  # a run that stopped at 0.74 s
-    out = np.asarray(sample(t, values, np.linspace(0.0, 1.0, 11), width=0.1))[:, 0]
+    out = np.asarray(sample(t, values, np.linspace(0.0, 1.0, 11),
+                            triangular_window(0.1)))[:, 0]
     assert np.allclose(out[:7], 1.0)  # windows up to 0.7 s end before 0.75 s
     assert np.all(np.isnan(out[8:]))
