@@ -24,6 +24,7 @@ its lowest point (``-b_w``) toward the wheel frame's forward axis ``n_w``.
 
 from typing import NamedTuple
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
@@ -89,19 +90,26 @@ def rail_foot(rail: Profile, eta, zeta) -> tuple[Float[Array, ""], Float[Array, 
     """
     lo, hi = rail.domain
 
-    def residual(u):
+    def residual(rail, eta, zeta, u):
         f, f1 = rail.height(u), rail.slope(u)
         return (eta - u) + (zeta - f) * f1, f, f1
 
-    def newton(u, _):
-        g, f, f1 = residual(u)
+    def newton(rail, eta, zeta, u):
+        g, f, f1 = residual(rail, eta, zeta, u)
         dg = -1.0 - f1 * f1 + (zeta - f) * rail.second_derivative(u)
         # On a convex head dg <= -1 near the foot; the floor guards far-away points.
         dg = jnp.minimum(dg, -0.5)
-        return jnp.clip(u - g / dg, lo, hi), None
+        return jnp.clip(u - g / dg, lo, hi)
 
-    u, _ = jax.lax.scan(newton, jnp.clip(eta, lo, hi), None, length=RAIL_NEWTON_STEPS)
-    converged = jnp.abs(residual(u)[0]) < 1e-9
+    # All steps but the last without derivatives; the last, from the (stopped) converged
+    # foot, carries them: at a root its derivative is the implicit function theorem's,
+    # -g_theta / g_u, and the tangents cost one step instead of RAIL_NEWTON_STEPS.
+    fixed = jax.tree.map(lambda x: jax.lax.stop_gradient(x) if eqx.is_inexact_array(x) else x,
+                         (rail, eta, zeta))
+    u, _ = jax.lax.scan(lambda u, _: (newton(*fixed, u), None), jnp.clip(fixed[1], lo, hi),
+                        None, length=RAIL_NEWTON_STEPS - 1)
+    u = newton(rail, eta, zeta, jax.lax.stop_gradient(u))
+    converged = jnp.abs(residual(*fixed, jax.lax.stop_gradient(u))[0]) < 1e-9
     valid = (eta > lo) & (eta < hi) & (u > lo) & (u < hi) & converged
     return u, jnp.where(valid, 1.0, 0.0)
 
