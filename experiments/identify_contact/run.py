@@ -125,24 +125,33 @@ def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6), names=GRADIENT, mode="re
     print(json.dumps(report, indent=2))
 
 
-def fits(out: Path, which=("noise_free", "noisy"), max_iterations=15):
+def noisy_measurements(clean, seed):
+    """``clean`` plus Gaussian noise of its channels' levels (seed ``seed``)."""
+    rng = np.random.default_rng(seed)
+    return Measurements(clean.time, clean.channels,
+                        clean.values + clean.noise * rng.standard_normal(clean.values.shape),
+                        clean.noise)
+
+
+def fits(out: Path, which=("noise_free", "noisy"), max_iterations=15, seeds=(SEED,)):
+    """The noise-free fit and one noisy fit per seed (labelled ``noisy`` for the study's
+    seed, ``noisy_seed<N>`` for others)."""
     scenario = load_scenario(SCENARIO)
     built, clean = truth(scenario)
-    rng = np.random.default_rng(SEED)
-    noisy = Measurements(clean.time, clean.channels,
-                         clean.values + clean.noise * rng.standard_normal(clean.values.shape),
-                         clean.noise)
     truth_values = np.asarray(get_values(built[0], built[1], FIT))
     initial = dict(zip(FIT, truth_values * OFF))
     report = {"scenario": SCENARIO, "truth": dict(zip(FIT, truth_values.tolist())),
               "initial": {k: float(v) for k, v in initial.items()}, "channels": CHANNELS,
-              "sample_rate_hz": SAMPLE_RATE, "seed": SEED}
-    for label, measurements in (("noise_free", clean), ("noisy", noisy)):
-        if label not in which:
-            continue
+              "sample_rate_hz": SAMPLE_RATE}
+    runs = [("noise_free", clean, None)] if "noise_free" in which else []
+    if "noisy" in which:
+        runs += [("noisy" if seed == SEED else f"noisy_seed{seed}",
+                  noisy_measurements(clean, seed), seed) for seed in seeds]
+    for label, measurements, seed in runs:
+        report["seed"] = seed
         write_measurements(out / f"measurements_{label}.csv", measurements,
                            comment=f"synthetic {label} measurements of {SCENARIO} "
-                                   f"(experiments/identify_contact/run.py, seed {SEED})")
+                                   f"(experiments/identify_contact/run.py, seed {seed})")
         start = time.perf_counter()
         result = identify(scenario, measurements, FIT, initial=initial,
                           max_iterations=max_iterations, progress=True, built=built)
@@ -203,6 +212,8 @@ def main():
     parser.add_argument("--only", choices=("noise_free", "noisy"),
                         help="fit: only this data set")
     parser.add_argument("--iterations", type=int, default=15, help="fit: maximum iterations")
+    parser.add_argument("--seeds", default=str(SEED),
+                        help="fit: noise seeds of the noisy fits, comma-separated")
     parser.add_argument("--parameters", default=",".join(GRADIENT),
                         help="gradient: the parameters (default: all five)")
     parser.add_argument("--steps", default="1e-4,1e-5,1e-6",
@@ -218,7 +229,8 @@ def main():
         batch_check(args.out)
     else:
         fits(args.out, (args.only,) if args.only else ("noise_free", "noisy"),
-             max_iterations=args.iterations)
+             max_iterations=args.iterations,
+             seeds=tuple(int(seed) for seed in args.seeds.split(",")))
 
 
 if __name__ == "__main__":
