@@ -45,7 +45,8 @@ class FitResult:
     reduced_chi2: 2 loss / (M - k), about 1 if the residuals are pure noise of the
     stated levels; jacobian (M, k) = dr / d log v (the one of the standard errors) and
     residuals (M,) at the values;
-    evaluations: number of simulations run (line-search trials and gradients);
+    evaluations: number of simulations run (line-search trials, gradients, the
+    Gauss-Newton steps' differences and the final Jacobians);
     stop_reason.
     """
 
@@ -122,7 +123,9 @@ POLISH_ITERATIONS = 6  # most Gauss-Newton steps at the end of a fit
 # [standard errors] a Gauss-Newton step this short has converged: on a rough loss the
 # steps settle at about a tenth of a standard error (tests/identify/test_fit.py)
 POLISH_TOLERANCE = 0.2
-LOSS_SLACK = 0.5  # rise of the loss a Gauss-Newton step may take: one standard error's
+# Rise of the loss a Gauss-Newton step may take: 0.5, what moving one parameter by one
+# standard error costs, about the ripple of a rough loss.
+LOSS_SLACK = 0.5
 
 
 def _compiled(residuals, method, learning_rate, forward_residuals=None):
@@ -221,19 +224,29 @@ def least_squares(residuals, names, initial, lower, upper, data=None, method="lb
     bounds = (jnp.asarray(lower), jnp.asarray(upper))
     to_values, to_z = _transform(*bounds)
 
+    # every simulation goes through value_and_grad or residuals_at, which count them
     def value_and_grad(z):
-        nonlocal jacobian_z
+        nonlocal jacobian_z, evaluations
+        evaluations += 1
         value, grad, jacobian_z = gradient_program(z, bounds, data)
         return value, grad
 
-    def value_only(z):
-        return 0.5 * float(jnp.sum(residuals_z(z, bounds, data) ** 2))
+    def residuals_at(z):
+        nonlocal evaluations
+        evaluations += 1
+        return np.asarray(residuals_z(z, bounds, data))
 
-    jacobian_z = None
+    def residuals_in_log(x):
+        return residuals_at(to_z(jnp.exp(jnp.asarray(x))))
+
+    def value_only(z):
+        return 0.5 * float(np.sum(residuals_at(z) ** 2))
+
+    jacobian_z, evaluations = None, 0
     z = to_z(jnp.asarray(initial))
     state = optimizer.init(z)
     value, grad = value_and_grad(z)
-    losses, values, converged, evaluations = [float(value)], [np.asarray(to_values(z))], False, 1
+    losses, values, converged = [float(value)], [np.asarray(to_values(z))], False
     reason = "maximum iterations"
     if progress is not None:
         progress(0, losses[0], values[0])
@@ -255,10 +268,8 @@ def least_squares(residuals, names, initial, lower, upper, data=None, method="lb
             for _ in range(BACKTRACKS):
                 trial = z + step * direction
                 trial_value = value_only(trial)
-                evaluations += 1
                 if trial_value <= float(value) + ARMIJO * step * slope:
                     trial_value, trial_grad = value_and_grad(trial)
-                    evaluations += 1
                     break
                 step *= 0.5
             else:
@@ -267,7 +278,6 @@ def least_squares(residuals, names, initial, lower, upper, data=None, method="lb
         else:
             trial = optax.apply_updates(z, direction)
             trial_value, trial_grad = value_and_grad(trial)
-            evaluations += 1
         previous = float(value)
         z, value, grad = trial, trial_value, trial_grad
         losses.append(float(value))
@@ -282,13 +292,9 @@ def least_squares(residuals, names, initial, lower, upper, data=None, method="lb
 
     gauss_newton_iterations, jacobian = 0, None
     if jacobian_step is not None and polish_iterations > 0:
-        def in_log(x):
-            return np.asarray(residuals_z(to_z(jnp.exp(x)), bounds, data))
-
         x, polished, jacobian, gauss_newton_iterations, stop = gauss_newton(
-            in_log, np.log(np.asarray(to_values(z))), np.log(lower), np.log(upper),
-            jacobian_step, polish_iterations)
-        evaluations += gauss_newton_iterations * (2 * len(names) + 1)
+            residuals_in_log, np.log(np.asarray(to_values(z))), np.log(lower),
+            np.log(upper), jacobian_step, polish_iterations)
         for loss, values_x in polished:
             losses.append(loss)
             values.append(np.exp(values_x))
@@ -298,22 +304,25 @@ def least_squares(residuals, names, initial, lower, upper, data=None, method="lb
             converged, reason = stop == "converged", f"Gauss-Newton: {stop}"
         if gauss_newton_iterations:
             z = to_z(jnp.exp(jnp.asarray(x)))
-            value, grad = value_and_grad(z)
+            if gradient == "forward":  # the local J at the final point
+                value, grad = value_and_grad(z)
     fitted = np.asarray(to_values(z))
-    if jacobian_z is not None:
-        # forward mode: J at the last gradient, in log v
-        span = jnp.log(bounds[1]) - jnp.log(bounds[0])
-        r = residuals_z(z, bounds, data)
-        local = jacobian_z / (span * jax.nn.sigmoid(z) * jax.nn.sigmoid(-z))
+    # d log v / dz of the bounded transform
+    log_slope = (jnp.log(bounds[1]) - jnp.log(bounds[0])) * jax.nn.sigmoid(z) * jax.nn.sigmoid(-z)
+    if gradient == "forward":  # J at the last gradient, in log v
+        r = residuals_at(z)
+        local = np.asarray(jacobian_z / log_slope)
     else:
         r, local = residuals_and_jacobian(forward, fitted, data)
-    local = np.asarray(local)
+        evaluations += 1
+        r, local = np.asarray(r), np.asarray(local)
+        if gauss_newton_iterations:  # the gradient at the final point, from the same J
+            grad = (local * np.asarray(log_slope)).T @ r
     if jacobian_step is None:
         jacobian = local
     elif jacobian is None:
-        jacobian = secant_jacobian(
-            lambda x: np.asarray(residuals_z(to_z(jnp.exp(x)), bounds, data)),
-            np.log(fitted), np.log(lower), np.log(upper), jacobian_step)
+        jacobian = secant_jacobian(residuals_in_log, np.log(fitted), np.log(lower),
+                                   np.log(upper), jacobian_step)
     covariance, correlation = gauss_newton_covariance(jacobian)
     local_covariance, _ = gauss_newton_covariance(local)
     m = jacobian.shape[0]
