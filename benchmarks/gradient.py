@@ -38,7 +38,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "experiments",
 from run import CHANNELS, FIT, SCENARIO, truth  # noqa: E402
 
 from jaxrail.identify import get_values, simulation_residuals  # noqa: E402
-from jaxrail.identify.fit import residuals_and_jacobian  # noqa: E402
+from jaxrail.identify.fit import loss_gradient_jacobian  # noqa: E402
 from jaxrail.scenarios import load_scenario  # noqa: E402
 
 
@@ -46,12 +46,6 @@ def compiled(function, x):
     start = time.perf_counter()
     program = jax.jit(function).lower(x).compile()
     return program, time.perf_counter() - start
-
-
-def forward_loss_and_gradient(residuals, values, data):
-    """0.5 |r|^2 and its gradient in log v, J^T r, by forward mode."""
-    r, jacobian = residuals_and_jacobian(residuals, values, data)
-    return 0.5 * jnp.sum(r ** 2), jacobian.T @ r
 
 
 def median_time(program, x, repeats):
@@ -103,7 +97,7 @@ def main():
             residuals = simulation_residuals(vehicle, params, track, FIT, measured,
                                              forward=True, **common)
             gradient, gradient_compile = compiled(
-                lambda v, r=residuals: forward_loss_and_gradient(r, v, data), x)
+                lambda v, r=residuals: loss_gradient_jacobian(lambda v: r(v, data), v)[:2], x)
         else:
             adjoint = (diffrax.RecursiveCheckpointAdjoint(checkpoints=options.max_steps)
                        if name == "per_step" else diffrax.RecursiveCheckpointAdjoint())

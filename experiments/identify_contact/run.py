@@ -27,7 +27,7 @@ from jaxrail import enable_float64
 
 enable_float64()
 
-from jaxrail.identify.fit import jacobian_by_jvp  # noqa: E402
+from jaxrail.identify.fit import loss_gradient_jacobian  # noqa: E402
 from jaxrail.identify import (Measurements, get_values, identify,  # noqa: E402
                               set_values, simulate_channels, simulation_residuals,
                               write_measurements)
@@ -82,8 +82,7 @@ def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6), names=GRADIENT, mode="re
                                        **common)
 
         def loss_and_gradient(v):
-            r, jacobian = jacobian_by_jvp(lambda v: forward(v, data), v)
-            return 0.5 * jnp.sum(r ** 2), jacobian.T @ r
+            return loss_gradient_jacobian(lambda v: forward(v, data), v)[:2]
     else:
         loss_and_gradient = jax.value_and_grad(loss)
     truth_values = np.asarray(get_values(vehicle, params, names))

@@ -156,8 +156,7 @@ def _compiled(residuals, method, learning_rate, forward_residuals=None):
 
     def forward(z, bounds, data):
         to_values = _transform(*bounds)[0]
-        r, jacobian = jacobian_by_jvp(lambda z: forward_residuals(to_values(z), data), z)
-        return 0.5 * jnp.sum(r ** 2), jacobian.T @ r, jacobian
+        return loss_gradient_jacobian(lambda z: forward_residuals(to_values(z), data), z)
 
     _COMPILED[key] = (optimizer, jax.jit(reverse if forward_residuals is None else forward),
                       jax.jit(residuals_z),
@@ -171,6 +170,13 @@ def jacobian_by_jvp(function, x):
     basis = jnp.eye(x.shape[0])
     r, columns = jax.vmap(lambda e: jax.jvp(function, (x,), (e,)), out_axes=(None, 0))(basis)
     return r, columns.T
+
+
+def loss_gradient_jacobian(function, x):
+    """``0.5 |r|^2``, its gradient ``J^T r`` and ``J`` (M, k) of ``r = function(x)`` by
+    forward mode (:func:`jacobian_by_jvp`)."""
+    r, jacobian = jacobian_by_jvp(function, x)
+    return 0.5 * jnp.sum(r ** 2), jacobian.T @ r, jacobian
 
 
 def residuals_and_jacobian(residuals, values, data):
