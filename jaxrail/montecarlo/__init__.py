@@ -14,7 +14,7 @@ import dataclasses
 import numpy as np
 
 from ..identify.parameters import PARAMETERS, get_values
-from .batch import chunk_size, run_chunks
+from .batch import run_chunks
 from .sampling import DESIGNS, Variation, check_names, draw, parse_variation
 from .summary import sample_row
 from .table import read_table, write_table
@@ -85,16 +85,16 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
         if keep_results:
             kept.append(result)
 
-    compile_s, run_s = run_chunks((vehicle, track, params), (values, speed, shift), chunk,
-                                  devices, progress=progress, on_chunk=collect, names=names,
-                                  duration=duration, options=options)
+    compile_s, run_s, chunk = run_chunks((vehicle, track, params), (values, speed, shift),
+                                         chunk, devices, progress=progress, on_chunk=collect,
+                                         names=names, duration=duration, options=options)
     table = {"sample": np.arange(n), "speed": speed.copy(), "misalignment": shift.copy()}
     table |= {k: np.asarray(samples[k], np.float64) for k in names}
     for key in rows[0]:
         table[key] = np.array([row[key] for row in rows])
     results = (jax.tree.map(lambda *xs: np.concatenate(xs), *kept) if keep_results else None)
-    return MonteCarlo(table, dict(samples), compile_s, run_s,
-                      chunk_size(chunk, n, len(devices)), len(devices), results=results)
+    return MonteCarlo(table, dict(samples), compile_s, run_s, chunk, len(devices),
+                      results=results)
 
 
 def run_montecarlo(scenario, variations, n: int, *, seed: int = 0, design: str = "latin",

@@ -107,7 +107,7 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
     receives each chunk's host result without the padding. The compiled program is
     cached per structure, options and chunk (:func:`jaxrail.simulate.simulate`'s
     cache): a second study of the same vehicle does not recompile. Returns (compile
-    time [s], 0 if cached; run time [s])."""
+    time [s], 0 if cached; run time [s]; the chunk used, :func:`chunk_size`)."""
     devices = tuple(jax.devices() if devices is None else devices)
     n = len(inputs[0])
     chunk = chunk_size(chunk, n, len(devices))
@@ -133,4 +133,4 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
             bar.update(stop - start)
     if bar is not None:
         bar.close()
-    return compile_s, run_s
+    return compile_s, run_s, chunk

@@ -7,8 +7,10 @@ Columns (W wheelsets, K = 1..W leading first, SIDE = left/right):
 - ``max_lateral_displacement_K_m``: max |lateral offset| of wheelset K from the
   track centreline;
 - ``max_Y_over_Q_K``: max Y/Q of wheelset K's two wheels (Nadal convention,
-  :func:`jaxrail.results.derailment_ratio`), and ``nadal_limit`` for the sample's
-  friction and a 70 deg flange;
+  :func:`jaxrail.results.derailment_ratio`), instantaneous; ``max_Y_over_Q_mean_K``:
+  the max of each wheel's Y/Q averaged over a sliding 2 m of track (EN 14363's
+  evaluation: a flange-climb risk has to last, an impact peak of a few ms does not
+  lift a wheel); and ``nadal_limit`` for the sample's friction and a 70 deg flange;
 - ``max_sum_Y_K_N``: max |Sum Y| of wheelset K, the track shifting force (the
   lateral forces of its two wheels on the rails, added in the track frame), averaged
   over a sliding 2 m of track as EN 14363 does; ``prudhomme_limit_K_N``:
@@ -23,9 +25,9 @@ Columns (W wheelsets, K = 1..W leading first, SIDE = left/right):
 
 import numpy as np
 
-from ..results import SIDES, derailment_ratio, nadal_limit, summarize
+from ..results import SIDES, _masked_max, derailment_ratio, nadal_limit, summarize
 
-SUM_Y_WINDOW_M = 2.0  # [m] EN 14363 sliding mean of the track shifting force
+SLIDING_WINDOW_M = 2.0  # [m] EN 14363 sliding mean of Y/Q and of the track shifting force
 PRUDHOMME_ALPHA = 1.0  # 1 for passenger vehicles and locomotives, 0.85 for freight
 
 
@@ -63,9 +65,10 @@ def wear_number(result):
 
 
 def _finite_max(x):
+    """Largest finite value, NaN if there is none."""
     x = np.asarray(x, dtype=np.float64)
-    x = x[np.isfinite(x)]
-    return float(np.max(x)) if x.size else float("nan")
+    best = _masked_max(x, np.isfinite(x))
+    return np.nan if best is None else best
 
 
 def sample_row(result, friction, speed) -> dict:
@@ -76,11 +79,11 @@ def sample_row(result, friction, speed) -> dict:
     n_wheelsets = len(summary["wheelsets"])
     row = {"status": summary["status"], "simulated_time_s": summary["simulated_time_s"],
            "steps": summary["steps"], "nadal_limit": nadal_limit(friction)}
-    ratio = derailment_ratio(result)
     t = np.asarray(result.t, dtype=np.float64)[valid]  # diffrax fills unreached times with inf
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
-    window = int(round(SUM_Y_WINDOW_M / max(float(speed) * dt, 1e-12)))
+    window = int(round(SLIDING_WINDOW_M / max(float(speed) * dt, 1e-12)))
     sum_y = track_shifting_force(result)[valid]
+    ratio = derailment_ratio(result)[valid]
     vertical = np.asarray(result.wheels.vertical_force, dtype=np.float64)
     tgamma = wear_number(result)[valid]
     for k in range(n_wheelsets):
@@ -88,6 +91,8 @@ def sample_row(result, friction, speed) -> dict:
         lateral = summary["wheelsets"][k]["max_lateral_displacement_m"]
         row[f"max_lateral_displacement_{name}_m"] = np.nan if lateral is None else lateral
         row[f"max_Y_over_Q_{name}"] = _finite_max(ratio[:, k, :])
+        row[f"max_Y_over_Q_mean_{name}"] = _finite_max(
+            [sliding_mean(ratio[:, k, j], window) for j in range(2)])
         row[f"max_sum_Y_{name}_N"] = _finite_max(np.abs(sliding_mean(sum_y[:, k], window)))
         row[f"prudhomme_limit_{name}_N"] = float(prudhomme_limit(np.sum(vertical[0, k])))
     peaks = [w["max_normal_force_N"] for w in summary["wheels"]]

@@ -24,6 +24,8 @@ QUANTITIES = {
                                  lambda t: 1e3 * worst(t, "max_lateral_displacement_")),
     "Y_over_Q_utilisation": ("max Y/Q / Nadal limit", "-",
                              lambda t: worst(t, "max_Y_over_Q_") / t["nadal_limit"]),
+    "Y_over_Q_mean_utilisation": ("max Y/Q (2 m) / Nadal limit", "-",
+                                  lambda t: worst(t, "max_Y_over_Q_mean_") / t["nadal_limit"]),
     "sum_Y_utilisation": ("max Sum Y (2 m) / Prud'homme limit", "-",
                           lambda t: worst(t, "max_sum_Y_", "prudhomme_limit_")),
     "max_normal_force": ("max normal force", "kN", lambda t: 1e-3 * t["max_normal_force_N"]),
@@ -58,12 +60,21 @@ def _axis(table, name):
     return np.asarray(table[name], np.float64) * scale, f"{name} [{unit}]" if unit else name
 
 
+def _panels(height):
+    """A figure with one panel per quantity, four to a row (unused panels hidden)."""
+    rows = -(-len(QUANTITIES) // 4)
+    fig, axes = plt.subplots(rows, 4, figsize=(18.0, height * rows / 2), dpi=90)
+    for ax in axes.flat[len(QUANTITIES):]:
+        ax.set_visible(False)
+    return fig, axes
+
+
 def plot_maps(table, path, x="speed", y="misalignment"):
     """One panel per quantity over inputs ``x`` and ``y`` (PNG at ``path``)."""
     xs, xlabel = _axis(table, x)
     ys, ylabel = _axis(table, y)
     ok = np.asarray(table["status"]) == "successful"
-    fig, axes = plt.subplots(2, 3, figsize=(14.0, 8.0), dpi=90)
+    fig, axes = _panels(8.0)
     for ax, (key, (title, unit, value)) in zip(axes.flat, QUANTITIES.items()):
         z = value(table)
         good = ok & np.isfinite(z)
@@ -84,7 +95,7 @@ def plot_maps(table, path, x="speed", y="misalignment"):
 def plot_distributions(table, path):
     """Histogram of each quantity over the successful samples (PNG at ``path``)."""
     ok = np.asarray(table["status"]) == "successful"
-    fig, axes = plt.subplots(2, 3, figsize=(14.0, 7.0), dpi=90)
+    fig, axes = _panels(7.0)
     for ax, (key, (title, unit, value)) in zip(axes.flat, QUANTITIES.items()):
         z = value(table)[ok]
         z = z[np.isfinite(z)]

@@ -20,6 +20,7 @@ def synthetic_table(n=40, seed=0):
     for k in (1, 2):
         table[f"max_lateral_displacement_{k}_m"] = shift * (1.0 + 0.1 * k) + 1e-4 * speed
         table[f"max_Y_over_Q_{k}"] = 0.02 * speed / k
+        table[f"max_Y_over_Q_mean_{k}"] = 0.015 * speed / k
         table[f"max_sum_Y_{k}_N"] = 1e3 * speed / k
         table[f"prudhomme_limit_{k}_N"] = np.full(n, 46e3)
         for side in ("left", "right"):
