@@ -345,13 +345,24 @@ def angular_momentum(system: System, params: SystemParams, q, qdot) -> Array:
     return jnp.sum(each, axis=0)
 
 
+def _minimum_norm_solution(phi_q, rhs):
+    """x of least Euclidean norm with ``phi_q x = rhs``: ``phi_q^T (phi_q phi_q^T)^-1 rhs``
+    (``phi_q`` of full row rank, as the equations of motion need anyway).
+
+    The normal equations go through an LU solve rather than ``pinv``: the SVD behind
+    ``pinv``, batched (vmap), runs on XLA's CPU thread pool and waits for it, which
+    deadlocked programs sharded over several host devices (each device's program holds
+    one of the pool's threads)."""
+    return phi_q.T @ jnp.linalg.solve(phi_q @ phi_q.T, rhs)
+
+
 @eqx.filter_jit
 def consistent_initial_conditions(system: System, params: SystemParams, q0, qdot0,
                                   iterations: int = 12):
     """(q, qdot) with Phi(q) = 0 and Phi_q qdot = 0, nearest to (q0, qdot0).
 
     A fixed number of Gauss-Newton steps with the minimum-norm correction
-    q <- q - pinv(Phi_q) Phi, then the Euclidean projection of qdot0 onto the null
+    q <- q - Phi_q^+ Phi, then the Euclidean projection of qdot0 onto the null
     space of Phi_q (coordinates and velocities mixed without weights, so give a good
     guess for the coordinates you care about).
     """
@@ -359,12 +370,12 @@ def consistent_initial_conditions(system: System, params: SystemParams, q0, qdot
 
     def step(_, q):
         phi, phi_q, _, _ = constraints(system, params, q, zeros)
-        return q - jnp.linalg.pinv(phi_q) @ phi
+        return q - _minimum_norm_solution(phi_q, phi)
 
     q = jax.lax.fori_loop(0, iterations, step, jnp.asarray(q0, dtype=jnp.float64))
     _, phi_q, _, _ = constraints(system, params, q, zeros)
     qdot0 = jnp.asarray(qdot0, dtype=jnp.float64)
-    return q, qdot0 - jnp.linalg.pinv(phi_q) @ (phi_q @ qdot0)
+    return q, qdot0 - _minimum_norm_solution(phi_q, phi_q @ qdot0)
 
 
 def simulate_system(system: System, params: SystemParams, q0, qdot0, t1, dt0=1e-3,

@@ -123,6 +123,18 @@ def test_consistent_initial_conditions(swinging):
     assert np.linalg.norm(np.asarray(q0[:3]) - guess_r) > 1e-2
 
 
+def test_minimum_norm_correction_equals_the_pseudo_inverse():
+    """The correction of consistent_initial_conditions against NumPy's SVD pinv, for a
+    wide random matrix of full row rank, also under vmap."""
+    from jaxrail.multibody.system import _minimum_norm_solution
+
+    rng = np.random.default_rng(3)
+    phi_q, rhs = rng.normal(size=(4, 5, 9)), rng.normal(size=(4, 5))
+    expected = np.einsum("bij,bj->bi", np.linalg.pinv(phi_q), rhs)
+    assert np.allclose(_minimum_norm_solution(phi_q[0], rhs[0]), expected[0], atol=1e-12)
+    assert np.allclose(jax.vmap(_minimum_norm_solution)(phi_q, rhs), expected, atol=1e-12)
+
+
 def test_double_pendulum_constraint_violation_over_10_s(swinging):
     *_, qs, _, d = swinging
     # Baumgarte alpha = beta = 10 1/s (build_system's default), rtol = atol = 1e-10.
