@@ -7,9 +7,9 @@ compiled call of all samples, sharded over the devices) and of the sequential lo
 (the unbatched simulation compiled once, then called per sample), the throughputs in
 simulated seconds per wall second, their ratio, and the largest difference between
 the two runs' wheelset lateral displacements [m]. The measurement runs in a child
-process started with XLA_FLAGS=--xla_force_host_platform_device_count=2 (XLA reads
-the host device count once, at start); the batch runs there on the first device and
-then on both, the sequential loop once.
+process started with two host devices that run side by side
+(:func:`jaxrail.use_host_devices`: XLA reads the flags once, at start); the batch runs
+there on the first device and then on both, the sequential loop once.
 """
 
 import argparse
@@ -18,6 +18,8 @@ import os
 import subprocess
 import sys
 import time
+
+from jaxrail._devices import host_device_flags
 
 
 def measure(scenario_name, samples, duration, seed, device_counts):
@@ -79,8 +81,7 @@ def main():
                                  args.devices)))
         return
     env = dict(os.environ)
-    env["XLA_FLAGS"] = (env.get("XLA_FLAGS", "") +
-                        " --xla_force_host_platform_device_count=2").strip()
+    env["XLA_FLAGS"] = host_device_flags(2, env.get("XLA_FLAGS", ""))
     out = subprocess.run([sys.executable, __file__, "--child", "--scenario", args.scenario,
                           "--samples", str(args.samples), "--duration", str(args.duration),
                           "--seed", str(args.seed), "--devices", *map(str, args.devices)],

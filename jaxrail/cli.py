@@ -200,6 +200,10 @@ def _identify_command(args):
 
 
 def _montecarlo_command(args):
+    if args.host_devices is not None:  # before anything starts JAX's devices
+        from ._devices import use_host_devices
+
+        use_host_devices(args.host_devices)
     import numpy as np
 
     from .montecarlo import parse_variation, run_montecarlo, write_table
@@ -352,6 +356,9 @@ def build_parser():
                                                    ".parquet file (repeat for both)")
     mc.add_argument("--summary", help="write the JSON statistics here (default: stdout)")
     mc.add_argument("--plots", help="write the maps and distributions (PNG) here")
+    mc.add_argument("--host-devices", type=int, metavar="N",
+                    help="split each chunk over N CPU devices run side by side (e.g. one "
+                         "per core; sets XLA_FLAGS, see docs/montecarlo.md)")
     mc.add_argument("--distributed", action="store_true",
                     help="call jax.distributed.initialize first (several hosts)")
     mc.add_argument("--coordinator", help="with --distributed: host:port of process 0")

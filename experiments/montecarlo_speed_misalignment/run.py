@@ -1,11 +1,10 @@
 """Monte Carlo study: the bogie entering the paper's 300 m curve (shortened) over speed
 10-25 m/s and initial misalignment 0-5 mm (docs/montecarlo.md).
 
-``XLA_FLAGS=--xla_force_host_platform_device_count=2 python
-experiments/montecarlo_speed_misalignment/run.py OUT [--samples 128] [--chunk 64]
-[--seed 2026]`` writes into OUT the table (CSV and Parquet), the statistics (JSON)
-and the figures (maps over speed and misalignment, distributions); the flag shards
-each chunk over both cores.
+``python experiments/montecarlo_speed_misalignment/run.py OUT [--samples 128]
+[--chunk 64] [--seed 2026] [--host-devices 2]`` writes into OUT the table (CSV and
+Parquet), the statistics (JSON) and the figures (maps over speed and misalignment,
+distributions); each chunk is split over the host devices (one per core here).
 """
 
 import argparse
@@ -15,13 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jaxrail import enable_float64
-
-enable_float64()
-
-from jaxrail.montecarlo import run_montecarlo, write_table  # noqa: E402
-from jaxrail.plots.montecarlo import QUANTITIES, plot_distributions, plot_maps  # noqa: E402
-from jaxrail.scenarios import load_scenario  # noqa: E402
+from jaxrail import enable_float64, use_host_devices
 
 HERE = Path(__file__).parent
 VARY = ("speed=10:25", "misalignment=0:5e-3")
@@ -34,7 +27,14 @@ def main():
     parser.add_argument("--chunk", type=int, default=64)
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--duration", type=float, help="[s] (default: the scenario's 1.5 s)")
+    parser.add_argument("--host-devices", type=int, default=2)
     args = parser.parse_args()
+    use_host_devices(args.host_devices)  # before anything starts JAX's devices
+    enable_float64()
+    from jaxrail.montecarlo import run_montecarlo, write_table
+    from jaxrail.plots.montecarlo import QUANTITIES, plot_distributions, plot_maps
+    from jaxrail.scenarios import load_scenario
+
     args.out.mkdir(parents=True, exist_ok=True)
     scenario = load_scenario(HERE / "bogie-curve.toml")
     start = time.perf_counter()

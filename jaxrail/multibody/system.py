@@ -349,10 +349,8 @@ def _minimum_norm_solution(phi_q, rhs):
     """x of least Euclidean norm with ``phi_q x = rhs``: ``phi_q^T (phi_q phi_q^T)^-1 rhs``
     (``phi_q`` of full row rank, as the equations of motion need anyway).
 
-    The normal equations go through an LU solve rather than ``pinv``: the SVD behind
-    ``pinv``, batched (vmap), runs on XLA's CPU thread pool and waits for it, which
-    deadlocked programs sharded over several host devices (each device's program holds
-    one of the pool's threads)."""
+    The normal equations take one LU solve of an m x m matrix, cheaper than the SVD
+    of ``pinv``, with the same result."""
     return phi_q.T @ jnp.linalg.solve(phi_q @ phi_q.T, rhs)
 
 

@@ -16,6 +16,7 @@ import textwrap
 import numpy as np
 import pytest
 
+from jaxrail._devices import host_device_flags
 from jaxrail.montecarlo import run_samples
 from jaxrail.results import derailment_ratio, summarize
 from jaxrail.scenarios import parse_scenario
@@ -107,7 +108,8 @@ def test_sharded_over_two_host_devices_equals_unsharded(batch, tmp_path):
         enable_float64()
         sys.path.insert(0, {os.path.dirname(__file__)!r})
         from test_batch import SCENARIO, SAMPLES
-        from jaxrail.montecarlo import run_samples
+        from jaxrail._devices import host_device_flags
+from jaxrail.montecarlo import run_samples
         from jaxrail.scenarios import parse_scenario
         assert len(jax.devices()) == 2, jax.devices()
         samples = {{k: np.array(v + [v[1]]) for k, v in SAMPLES.items()}}  # 5: padded chunk
@@ -118,7 +120,7 @@ def test_sharded_over_two_host_devices_equals_unsharded(batch, tmp_path):
                   open({str(out)!r}, "w"))
     """)
     env = dict(os.environ)
-    env["XLA_FLAGS"] = (env.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=2")
+    env["XLA_FLAGS"] = host_device_flags(2, env.get("XLA_FLAGS", ""))
     subprocess.run([sys.executable, "-c", script], env=env, check=True, timeout=1500)
     sharded = json.loads(out.read_text())
     assert sharded["devices"] == 2 and sharded["chunk"] == 4
@@ -160,6 +162,7 @@ def test_command_writes_the_table_and_figures(batch, tmp_path):
     (("--samples", "4", "--vary", "speed"), "expected NAME=lo:hi"),
     (("--samples", "4", "--vary", "sped=1:2"), "unknown inputs"),
     (("--samples", "4", "--out", "t.xlsx"), "suffix must be .csv or .parquet"),
+    (("--samples", "4", "--host-devices", "0"), "need a count >= 1"),
 ])
 def test_bad_arguments_are_named_before_compiling(args, message):
     done = subprocess.run([sys.executable, "-m", "jaxrail.cli", "montecarlo",
