@@ -8,9 +8,11 @@ Columns (W wheelsets, K = 1..W leading first, SIDE = left/right):
   track centreline;
 - ``max_Y_over_Q_K``: max Y/Q of wheelset K's two wheels (Nadal convention,
   :func:`jaxrail.results.derailment_ratio`), instantaneous; ``max_Y_over_Q_mean_K``:
-  the max of each wheel's Y/Q averaged over a sliding 2 m of track (EN 14363's
-  evaluation: a flange-climb risk has to last, an impact peak of a few ms does not
-  lift a wheel); and ``nadal_limit`` for the sample's friction and a 70 deg flange;
+  the max over wheelset K's wheels of Y/Q over a sliding 2 m of track, as the ratio of
+  the 2 m means of Y and of Q (EN 14363 evaluates Y/Q over 2 m: a flange-climb risk has
+  to last, an impact peak of a few ms does not lift a wheel; the ratio of the means
+  stays defined where Q drops below 1 kN for an instant and Y/Q itself does not);
+  and ``nadal_limit`` for the sample's friction and a 70 deg flange;
 - ``max_sum_Y_K_N``: max |Sum Y| of wheelset K, the track shifting force (the
   lateral forces of its two wheels on the rails, added in the track frame), averaged
   over a sliding 2 m of track as EN 14363 does; ``prudhomme_limit_K_N``:
@@ -25,7 +27,8 @@ Columns (W wheelsets, K = 1..W leading first, SIDE = left/right):
 
 import numpy as np
 
-from ..results import SIDES, _masked_max, derailment_ratio, nadal_limit, summarize
+from ..results import (MIN_VERTICAL_FORCE_N, SIDES, _masked_max, derailment_ratio,
+                       nadal_limit, summarize)
 
 SLIDING_WINDOW_M = 2.0  # [m] EN 14363 sliding mean of Y/Q and of the track shifting force
 PRUDHOMME_ALPHA = 1.0  # 1 for passenger vehicles and locomotives, 0.85 for freight
@@ -39,6 +42,14 @@ def sliding_mean(values, window):
         return values
     cumulative = np.concatenate([[0.0], np.cumsum(values)])
     return (cumulative[window:] - cumulative[:-window]) / window
+
+
+def sliding_ratio(y, q, window):
+    """Y/Q over ``window`` consecutive values as the ratio of the sliding means of ``y``
+    and ``q`` [N]; NaN where the mean of ``q`` is under 1 kN."""
+    mean_q = sliding_mean(q, window)
+    loaded = mean_q > MIN_VERTICAL_FORCE_N
+    return np.where(loaded, sliding_mean(y, window) / np.where(loaded, mean_q, 1.0), np.nan)
 
 
 def prudhomme_limit(axle_load, alpha=PRUDHOMME_ALPHA):
@@ -84,6 +95,7 @@ def sample_row(result, friction, speed) -> dict:
     window = int(round(SLIDING_WINDOW_M / max(float(speed) * dt, 1e-12)))
     sum_y = track_shifting_force(result)[valid]
     ratio = derailment_ratio(result)[valid]
+    nadal_y = -np.asarray(result.wheels.lateral_force, dtype=np.float64)[valid]
     vertical = np.asarray(result.wheels.vertical_force, dtype=np.float64)
     tgamma = wear_number(result)[valid]
     for k in range(n_wheelsets):
@@ -92,7 +104,8 @@ def sample_row(result, friction, speed) -> dict:
         row[f"max_lateral_displacement_{name}_m"] = np.nan if lateral is None else lateral
         row[f"max_Y_over_Q_{name}"] = _finite_max(ratio[:, k, :])
         row[f"max_Y_over_Q_mean_{name}"] = _finite_max(
-            [sliding_mean(ratio[:, k, j], window) for j in range(2)])
+            [sliding_ratio(nadal_y[:, k, j], vertical[valid][:, k, j], window)
+             for j in range(2)])
         row[f"max_sum_Y_{name}_N"] = _finite_max(np.abs(sliding_mean(sum_y[:, k], window)))
         row[f"prudhomme_limit_{name}_N"] = float(prudhomme_limit(np.sum(vertical[0, k])))
     peaks = [w["max_normal_force_N"] for w in summary["wheels"]]

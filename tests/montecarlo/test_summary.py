@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from jaxrail.montecarlo import read_table, write_table
-from jaxrail.montecarlo.summary import (prudhomme_limit, sliding_mean, track_shifting_force,
-                                        wear_number)
+from jaxrail.montecarlo.summary import (prudhomme_limit, sliding_mean, sliding_ratio,
+                                        track_shifting_force, wear_number)
 
 
 def test_sliding_mean_equals_a_loop():
@@ -18,6 +18,15 @@ def test_sliding_mean_equals_a_loop():
         w = min(window, 37)
         loop = [np.mean(x[i:i + w]) for i in range(37 - w + 1)]
         assert np.allclose(sliding_mean(x, window), loop, rtol=0, atol=1e-13)
+
+
+def test_sliding_ratio_is_the_ratio_of_the_means_and_survives_an_unloaded_instant():
+    y = np.array([10e3, 20e3, 0.0, 30e3, 10e3])
+    q = np.array([50e3, 60e3, 0.0, 70e3, 40e3])  # the wheel lifts for one sample
+    expected = [(10e3 + 20e3 + 0.0) / (50e3 + 60e3 + 0.0), (20e3 + 0.0 + 30e3) / 130e3,
+                (0.0 + 30e3 + 10e3) / 110e3]
+    assert np.allclose(sliding_ratio(y, q, 3), expected, rtol=1e-14)
+    assert np.isnan(sliding_ratio(y, np.full(5, 500.0), 3)).all()  # mean Q under 1 kN
 
 
 def test_prudhomme_limit_of_a_110_kN_axle():
