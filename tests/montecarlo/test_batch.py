@@ -108,8 +108,7 @@ def test_sharded_over_two_host_devices_equals_unsharded(batch, tmp_path):
         enable_float64()
         sys.path.insert(0, {os.path.dirname(__file__)!r})
         from test_batch import SCENARIO, SAMPLES
-        from jaxrail._devices import host_device_flags
-from jaxrail.montecarlo import run_samples
+        from jaxrail.montecarlo import run_samples
         from jaxrail.scenarios import parse_scenario
         assert len(jax.devices()) == 2, jax.devices()
         samples = {{k: np.array(v + [v[1]]) for k, v in SAMPLES.items()}}  # 5: padded chunk
