@@ -46,6 +46,3 @@ def devices_may_stall(devices) -> bool:
     module docstring), i.e. XLA_FLAGS lacks ``--xla_cpu_multi_thread_eigen=false``."""
     cpu = [d for d in devices if d.platform == "cpu"]
     return len(cpu) > 1 and SINGLE_THREADED_OPS not in os.environ.get("XLA_FLAGS", "")
-
-
-

@@ -95,12 +95,18 @@ def _masked_max(values, mask):
     return float(best) if np.isfinite(best) else None
 
 
+def nadal_forces(result):
+    """``(Y, Q)`` (T, W, 2) [N] of every wheel in the Nadal convention (module
+    docstring): the lateral force on the rail, positive outward, and the vertical one."""
+    lateral = -np.asarray(result.wheels.lateral_force, dtype=np.float64)
+    return lateral, np.asarray(result.wheels.vertical_force, dtype=np.float64)
+
+
 def derailment_ratio(result):
     """Y/Q (T, W, 2) [-] of every wheel in the Nadal convention (module docstring):
     NaN where the wheel carries less than 1 kN or the time was not reached."""
     _, valid = _host(result)
-    lateral = -np.asarray(result.wheels.lateral_force, dtype=np.float64)
-    vertical = np.asarray(result.wheels.vertical_force, dtype=np.float64)
+    lateral, vertical = nadal_forces(result)
     loaded = valid[:, None, None] & (vertical > MIN_VERTICAL_FORCE_N)
     return np.where(loaded, lateral / np.where(loaded, vertical, 1.0), np.nan)
 

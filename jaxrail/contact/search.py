@@ -114,22 +114,23 @@ class ContactPatches(eqx.Module):
 
 
 def _surface_strips(surface, wheel, rail, geometry, config):
-    """The strip function of one wheel surface, its grid and all strips on it."""
+    """The strip function of one wheel surface, its grid and all strips on it (whose
+    rail feet carry no derivatives: the search differentiates only their depths)."""
     wheel_origin, frame, rail_origin, rail_axes, side = geometry
 
-    def point(y):
+    def point(y, foot_derivatives=True):
         return strip_point(surface, wheel.nominal_radius, rail, y, wheel_origin, frame,
-                           rail_origin, rail_axes, side)
+                           rail_origin, rail_axes, side, foot_derivatives)
 
     y_grid = config.strip_grid(surface)
-    return point, y_grid, jax.vmap(point)(y_grid)
+    return point, y_grid, jax.vmap(lambda y: point(y, False))(y_grid)
 
 
 def _surface_patches(surface, surface_index, wheel, rail, geometry, config, slots):
     """Patches of one wheel surface: strips, runs, refinement, contact data."""
     point, y_grid, strips = _surface_strips(surface, wheel, rail, geometry, config)
     index, active, keep, weights = find_patches(strips.depth, slots)
-    depth_fn = lambda y: point(y).depth  # noqa: E731
+    depth_fn = lambda y: point(y, False).depth  # noqa: E731
     y_star = jax.vmap(lambda i: refine_maximum(depth_fn, y_grid, strips.depth, i, surface.domain))(index)
     y_contact, blend, overlap = jax.vmap(lambda w, y: overlap_centre(w, strips.depth, y_grid, y))(
         weights, y_star)
@@ -149,9 +150,9 @@ def _surface_deepest(surface, wheel, rail, geometry, config):
     (penetrating or not)."""
     point, y_grid, strips = _surface_strips(surface, wheel, rail, geometry, config)
     depth = jnp.where(strips.rail_inside > 0.5, strips.depth, -1.0e3)
-    depth_fn = lambda y: point(y).depth  # noqa: E731
+    depth_fn = lambda y: point(y, False).depth  # noqa: E731
     y_star = refine_maximum(depth_fn, y_grid, depth, jnp.argmax(depth), surface.domain)
-    return point(y_star).depth, y_star
+    return depth_fn(y_star), y_star
 
 
 def _contact_data(surface, surface_index, wheel, rail, point, y, active, depth, curvature,
@@ -160,12 +161,12 @@ def _contact_data(surface, surface_index, wheel, rail, point, y, active, depth, 
     ``depth`` [m] and relative lateral curvature ``curvature`` [1/m]."""
     p = point(y)
     t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
-    f1 = rail.slope(p.y_rail)
+    f, f1, f2 = rail.height_derivatives(p.y_rail)
     normal = (-side * f1 * n + b) / jnp.sqrt(1.0 + f1 * f1)
-    rail_point = rail_origin + p.dx * t + side * p.y_rail * n + rail.height(p.y_rail) * b
+    rail_point = rail_origin + p.dx * t + side * p.y_rail * n + f * b
     lateral = jnp.cross(normal, t)
-    w1 = surface.slope(y)
-    rolling_radius = wheel.nominal_radius + surface.height(y)
+    w, w1, w2 = surface.height_derivatives(y)
+    rolling_radius = wheel.nominal_radius + w
     active = active & (depth > 0.0)
     return dict(
         active=active,
@@ -182,8 +183,8 @@ def _contact_data(surface, surface_index, wheel, rail, point, y, active, depth, 
         contact_angle=jnp.arctan(f1),
         rolling_radius=rolling_radius,
         curvature_wheel_x=1.0 / (jnp.sqrt(1.0 + w1 * w1) * rolling_radius),
-        curvature_wheel_y=-surface.second_derivative(y) / (1.0 + w1 * w1) ** 1.5,
-        curvature_rail_y=-rail.second_derivative(p.y_rail) / (1.0 + f1 * f1) ** 1.5,
+        curvature_wheel_y=-w2 / (1.0 + w1 * w1) ** 1.5,
+        curvature_rail_y=-f2 / (1.0 + f1 * f1) ** 1.5,
         curvature_contact_y=curvature,
     )
 

@@ -77,7 +77,8 @@ def longitudinal_offset(y, radius, slope, frame: WheelFrame, side) -> Float[Arra
     return side * (y + radius * slope) * frame.sin_alpha
 
 
-def rail_foot(rail: Profile, eta, zeta) -> tuple[Float[Array, ""], Float[Array, ""]]:
+def rail_foot(rail: Profile, eta, zeta, derivatives: bool = True
+              ) -> tuple[Float[Array, ""], Float[Array, ""]]:
     """Eq. (15): the rail coordinate ``u`` whose normal passes through ``(eta, zeta)``.
 
     ``(eta, zeta)`` are the point's field-side-lateral and vertical coordinates in the
@@ -87,16 +88,20 @@ def rail_foot(rail: Profile, eta, zeta) -> tuple[Float[Array, ""], Float[Array, 
     (``eta`` inside the domain), ``u`` did not hit the domain ends and the Newton
     residual converged (below 1e-9 m); elsewhere the depth has no meaning (a strip
     beside the rail, e.g. the back of the flange, is never in contact).
+
+    ``derivatives=False`` (static) gives ``u`` without derivatives: what a caller that
+    needs only the depth wants, since the distance along the normal is stationary in
+    ``u`` at the foot (:func:`signed_depth`).
     """
     lo, hi = rail.domain
 
     def residual(rail, eta, zeta, u):
-        f, f1 = rail.height(u), rail.slope(u)
-        return (eta - u) + (zeta - f) * f1, f, f1
+        f, f1, f2 = rail.height_derivatives(u)
+        return (eta - u) + (zeta - f) * f1, f, f1, f2
 
     def newton(rail, eta, zeta, u):
-        g, f, f1 = residual(rail, eta, zeta, u)
-        dg = -1.0 - f1 * f1 + (zeta - f) * rail.second_derivative(u)
+        g, f, f1, f2 = residual(rail, eta, zeta, u)
+        dg = -1.0 - f1 * f1 + (zeta - f) * f2
         # On a convex head dg <= -1 near the foot; the floor guards far-away points.
         dg = jnp.minimum(dg, -0.5)
         return jnp.clip(u - g / dg, lo, hi)
@@ -108,7 +113,7 @@ def rail_foot(rail: Profile, eta, zeta) -> tuple[Float[Array, ""], Float[Array, 
                          (rail, eta, zeta))
     u, _ = jax.lax.scan(lambda u, _: (newton(*fixed, u), None), jnp.clip(fixed[1], lo, hi),
                         None, length=RAIL_NEWTON_STEPS - 1)
-    u = newton(rail, eta, zeta, jax.lax.stop_gradient(u))
+    u = newton(*((rail, eta, zeta) if derivatives else fixed), jax.lax.stop_gradient(u))
     converged = jnp.abs(residual(*fixed, jax.lax.stop_gradient(u))[0]) < 1e-9
     valid = (eta > lo) & (eta < hi) & (u > lo) & (u < hi) & converged
     return u, jnp.where(valid, 1.0, 0.0)
@@ -116,9 +121,13 @@ def rail_foot(rail: Profile, eta, zeta) -> tuple[Float[Array, ""], Float[Array, 
 
 def signed_depth(rail: Profile, u, eta, zeta) -> Float[Array, ""]:
     """Distance of ``(eta, zeta)`` below the rail surface along the rail normal at ``u``
-    [m] (eq. 16; positive = inside the rail)."""
-    f1 = rail.slope(u)
-    gap = (zeta - rail.height(u)) - (eta - u) * f1
+    [m] (eq. 16; positive = inside the rail).
+
+    It is the distance to the rail's tangent line at ``u``, whose derivative in ``u`` is
+    ``-f'' g(u) / (1 + f'^2)^(3/2)`` with ``g`` the foot residual of :func:`rail_foot`:
+    zero at the foot, so the depth's derivatives need none of ``u``."""
+    f, f1, _ = rail.height_derivatives(u)
+    gap = (zeta - f) - (eta - u) * f1
     return -gap / jnp.sqrt(1.0 + f1 * f1)
 
 
@@ -132,6 +141,7 @@ def strip_point(
     rail_origin: Float[Array, "3"],
     rail_axes: Float[Array, "3 3"],
     side,
+    foot_derivatives: bool = True,
 ) -> StripPoint:
     """Geometry of the strip at wheel profile coordinate ``y`` [m].
 
@@ -145,15 +155,17 @@ def strip_point(
         rail_origin, rail_axes: rail profile origin [m] and rail frame ``[t n b]``
             (columns, global) at the rail section ``s_r``.
         side: +1.0 left wheel, -1.0 right wheel.
+        foot_derivatives: False (static) where only the depth is differentiated: the
+            rail foot ``u_r`` then carries no derivatives (:func:`rail_foot`).
     """
-    slope = surface.slope(y)
-    radius = nominal_radius + surface.height(y)
+    height, slope, _ = surface.height_derivatives(y)
+    radius = nominal_radius + height
     s_w = strip_angle(slope, frame, side)
     radial = -jnp.cos(s_w) * frame.up + jnp.sin(s_w) * frame.forward
     point = wheel_origin + side * y * frame.axle + radius * radial
     rel = point - rail_origin
     t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
     eta, zeta = side * (rel @ n), rel @ b
-    u, inside = rail_foot(rail, eta, zeta)
+    u, inside = rail_foot(rail, eta, zeta, foot_derivatives)
     depth = signed_depth(rail, u, eta, zeta)
     return StripPoint(depth, s_w, rel @ t, u, point, inside)

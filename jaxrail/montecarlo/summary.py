@@ -28,7 +28,7 @@ Columns (W wheelsets, K = 1..W leading first, SIDE = left/right):
 import numpy as np
 
 from ..results import (MIN_VERTICAL_FORCE_N, SIDES, _masked_max, derailment_ratio,
-                       nadal_limit, summarize)
+                       nadal_forces, nadal_limit, summarize)
 
 SLIDING_WINDOW_M = 2.0  # [m] EN 14363 sliding mean of Y/Q and of the track shifting force
 PRUDHOMME_ALPHA = 1.0  # 1 for passenger vehicles and locomotives, 0.85 for freight
@@ -61,9 +61,8 @@ def prudhomme_limit(axle_load, alpha=PRUDHOMME_ALPHA):
 def track_shifting_force(result):
     """Sum Y (T, W) [N]: the wheelset's lateral force on the track, track frame,
     positive to the left (NaN at times not reached)."""
-    lateral = np.asarray(result.wheels.lateral_force, dtype=np.float64)  # on the wheel
-    # lateral_force is positive towards each wheel's field side: left wheel +y, right -y.
-    return -(lateral[:, :, 0] - lateral[:, :, 1])
+    outward, _ = nadal_forces(result)  # on each rail, toward its field side
+    return outward[:, :, 0] - outward[:, :, 1]  # the left rail's is +y, the right's -y
 
 
 def wear_number(result):
@@ -95,8 +94,9 @@ def sample_row(result, friction, speed) -> dict:
     window = int(round(SLIDING_WINDOW_M / max(float(speed) * dt, 1e-12)))
     sum_y = track_shifting_force(result)[valid]
     ratio = derailment_ratio(result)[valid]
-    nadal_y = -np.asarray(result.wheels.lateral_force, dtype=np.float64)[valid]
-    vertical = np.asarray(result.wheels.vertical_force, dtype=np.float64)
+    nadal_y, vertical = nadal_forces(result)
+    static_vertical = vertical[0]
+    nadal_y, vertical = nadal_y[valid], vertical[valid]
     tgamma = wear_number(result)[valid]
     for k in range(n_wheelsets):
         name = k + 1
@@ -104,10 +104,10 @@ def sample_row(result, friction, speed) -> dict:
         row[f"max_lateral_displacement_{name}_m"] = np.nan if lateral is None else lateral
         row[f"max_Y_over_Q_{name}"] = _finite_max(ratio[:, k, :])
         row[f"max_Y_over_Q_mean_{name}"] = _finite_max(
-            [sliding_ratio(nadal_y[:, k, j], vertical[valid][:, k, j], window)
+            [sliding_ratio(nadal_y[:, k, j], vertical[:, k, j], window)
              for j in range(2)])
         row[f"max_sum_Y_{name}_N"] = _finite_max(np.abs(sliding_mean(sum_y[:, k], window)))
-        row[f"prudhomme_limit_{name}_N"] = float(prudhomme_limit(np.sum(vertical[0, k])))
+        row[f"prudhomme_limit_{name}_N"] = float(prudhomme_limit(np.sum(static_vertical[k])))
     peaks = [w["max_normal_force_N"] for w in summary["wheels"]]
     row["max_normal_force_N"] = _finite_max([np.nan if p is None else p for p in peaks])
     for entry in summary["wheels"]:

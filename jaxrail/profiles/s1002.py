@@ -123,19 +123,37 @@ SECTION_ROWS = {
 }
 
 
-def piecewise_height_mm(s, joints_ascending, rows):
-    """Height [mm] at ``s`` [mm] of a profile made of ``rows`` (section rows in increasing
-    S) separated by ``joints_ascending`` [mm]. At a joint the lower section is used; the
-    sections meet there in value and slope, so the choice does not matter."""
+def piecewise_derivatives_mm(s, joints_ascending, rows):
+    """Height [mm], slope [-] and second derivative [1/mm] at ``s`` [mm] of a profile
+    made of ``rows`` (section rows in increasing S) separated by ``joints_ascending``
+    [mm], in closed form. At a joint the lower section is used; the sections meet there
+    in value and slope, so the choice does not matter."""
     poly = jnp.asarray(np.stack([r[0] for r in rows]), dtype=jnp.float64)
     arc = jnp.asarray(np.stack([r[1] for r in rows]), dtype=jnp.float64)
     index = jnp.searchsorted(jnp.asarray(joints_ascending, dtype=jnp.float64), s)
     coefficients, (weight, radius_sq, centre) = poly[index], arc[index]
-    value = coefficients[_DEGREE]
+    # Horner's scheme for the polynomial and its first two derivatives at once.
+    value, first, second = coefficients[_DEGREE], 0.0, 0.0
     for k in range(_DEGREE - 1, -1, -1):
+        second = second * s + first
+        first = first * s + value
         value = value * s + coefficients[k]
-    argument = radius_sq - (s + centre) ** 2
-    return value + weight * jnp.sqrt(jnp.where(argument > _SQRT_FLOOR, argument, _SQRT_FLOOR))
+    # The arc: w sqrt(A), A = r^2 - (s + c)^2; constant where A is at its floor.
+    offset = s + centre
+    argument = radius_sq - offset**2
+    on_arc = argument > _SQRT_FLOOR
+    root = jnp.sqrt(jnp.where(on_arc, argument, _SQRT_FLOOR))
+    arc_slope = jnp.where(on_arc, -offset / root, 0.0)
+    arc_second = jnp.where(on_arc, -radius_sq / (root * root * root), 0.0)
+    return (value + weight * root, first + weight * arc_slope,
+            2.0 * second + weight * arc_second)
+
+
+def height_derivatives_from_mm(derivatives_mm, y):
+    """``(height [m], slope [-], second derivative [1/m])`` at ``y`` [m] of a profile
+    whose ``derivatives_mm(s)`` works in mm."""
+    f, f1, f2 = derivatives_mm(1e3 * jnp.asarray(y, dtype=jnp.float64))
+    return 1e-3 * f, f1, 1e3 * f2
 
 
 # Sections in increasing S (H .. A) and the joints between them, increasing.
@@ -143,11 +161,12 @@ _ROWS_ASCENDING = tuple(SECTION_ROWS[k] for k in "HGFEDCBA")
 _JOINTS_ASCENDING = tuple(sorted(SECTION_JOINTS_MM))
 
 
-def s1002_height_mm(s_mm: Float[ArrayLike, ""]) -> Float[Array, ""]:
-    """S1002 height ``F`` [mm] at lateral position ``S`` [mm] (scalar), smoothed as the
-    module docstring says. Gradients are finite everywhere."""
+def s1002_derivatives_mm(s_mm: Float[ArrayLike, ""]) -> tuple[Array, Array, Array]:
+    """S1002 height ``F`` [mm], ``dF/dS`` [-] and ``d^2F/dS^2`` [1/mm] at lateral
+    position ``S`` [mm] (scalar), smoothed as the module docstring says. Gradients are
+    finite everywhere."""
     s = jnp.asarray(s_mm, dtype=jnp.float64)
-    return piecewise_height_mm(s, _JOINTS_ASCENDING, _ROWS_ASCENDING)
+    return piecewise_derivatives_mm(s, _JOINTS_ASCENDING, _ROWS_ASCENDING)
 
 
 class S1002(Profile):
@@ -165,9 +184,11 @@ class S1002(Profile):
     def domain(self) -> tuple[float, float]:
         return S1002_DOMAIN
 
+    def height_derivatives(self, y: Float[ArrayLike, ""]) -> tuple[Array, Array, Array]:
+        return height_derivatives_from_mm(s1002_derivatives_mm, y)
+
     def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
-        y = jnp.asarray(y, dtype=jnp.float64)
-        return 1e-3 * s1002_height_mm(1e3 * y)
+        return self.height_derivatives(y)[0]
 
 
 def s1002(nominal_radius: float = 0.46) -> WheelProfile:

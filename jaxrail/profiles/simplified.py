@@ -38,7 +38,8 @@ from .s1002 import (
     SECTION_JOINTS_MM,
     SECTION_ROWS,
     _row,
-    piecewise_height_mm,
+    height_derivatives_from_mm,
+    piecewise_derivatives_mm,
 )
 
 _AB_JOINT, _TREAD_END, _, _FLANK_TOP, _EF_JOINT, _FG_JOINT, _GH_JOINT = SECTION_JOINTS_MM
@@ -65,11 +66,11 @@ _FLANGE_JOINTS = (_GH_JOINT, _FG_JOINT, _EF_JOINT)
 
 
 def _tread_mm(s):
-    return piecewise_height_mm(s, _TREAD_JOINTS, _TREAD_ROWS)
+    return piecewise_derivatives_mm(s, _TREAD_JOINTS, _TREAD_ROWS)
 
 
 def _flange_mm(s):
-    return piecewise_height_mm(s, _FLANGE_JOINTS, _FLANGE_ROWS)
+    return piecewise_derivatives_mm(s, _FLANGE_JOINTS, _FLANGE_ROWS)
 
 
 class SimplifiedTread(Profile):
@@ -82,8 +83,11 @@ class SimplifiedTread(Profile):
     def domain(self) -> tuple[float, float]:
         return TREAD_DOMAIN
 
+    def height_derivatives(self, y: Float[ArrayLike, ""]) -> tuple[Array, Array, Array]:
+        return height_derivatives_from_mm(_tread_mm, y)
+
     def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
-        return 1e-3 * _tread_mm(1e3 * jnp.asarray(y, dtype=jnp.float64))
+        return self.height_derivatives(y)[0]
 
 
 class SimplifiedFlange(Profile):
@@ -96,8 +100,11 @@ class SimplifiedFlange(Profile):
     def domain(self) -> tuple[float, float]:
         return FLANGE_DOMAIN
 
+    def height_derivatives(self, y: Float[ArrayLike, ""]) -> tuple[Array, Array, Array]:
+        return height_derivatives_from_mm(_flange_mm, y)
+
     def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
-        return 1e-3 * _flange_mm(1e3 * jnp.asarray(y, dtype=jnp.float64))
+        return self.height_derivatives(y)[0]
 
 
 def simplified_s1002(nominal_radius: float = 0.46) -> WheelProfile:

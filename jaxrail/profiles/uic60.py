@@ -123,10 +123,12 @@ def _breaks(table):
     return table[1:, 3]
 
 
-def _piece_height_slope(xp, row, y):
-    """Height and slope [m, -] of the piece whose table row is ``row``, continued to
-    ``y`` [m] beyond its joints (circles beyond their vertical tangents give a finite
-    dummy; the gradient-safe double ``where`` keeps NaN out of derivatives)."""
+def _piece_derivatives(xp, row, y):
+    """Height, slope and second derivative [m, -, 1/m] of the piece whose table row is
+    ``row``, continued to ``y`` [m] beyond its joints (circles beyond their vertical
+    tangents give a finite dummy; the gradient-safe double ``where`` keeps NaN out of
+    derivatives). A circle ``zc + sqrt(r^2 - d^2)`` has slope ``-d / root`` and second
+    derivative ``-r^2 / root^3``; a line has its slope and zero."""
     yc, y0, dy, zc, z0, dz, radius, is_line = (row[i] for i in (0, 1, 2, 4, 5, 6, 8, 9))
     d = y - yc
     arg = radius * radius - d * d
@@ -134,11 +136,13 @@ def _piece_height_slope(xp, row, y):
     root = xp.sqrt(xp.where(ok, arg, 1.0))
     circle_h = zc + xp.where(ok, root, 0.0)
     circle_s = xp.where(ok, -d / root, 0.0)
+    circle_c = xp.where(ok, -radius * radius / (root * root * root), 0.0)
     # The gauge flank turns vertical at 1:20 (dy = 0); it lies outside the domain then.
     steep = xp.abs(dy) <= 1e-12
     m = xp.where(steep, 0.0, dz / xp.where(steep, 1.0, dy))
     line = is_line > 0.5
-    return xp.where(line, z0 + m * (y - y0), circle_h), xp.where(line, m, circle_s)
+    return (xp.where(line, z0 + m * (y - y0), circle_h), xp.where(line, m, circle_s),
+            xp.where(line, 0.0, circle_c))
 
 
 def _canted_pieces(theta):
@@ -146,7 +150,7 @@ def _canted_pieces(theta):
     ``breaks``, ``joint_z`` (6,), per piece ``yc, zc, radius`` and the line ``y0, z0, m``
     (7,) [m]."""
     table = _canted_table(np, np.float64(theta))
-    m = np.array([_piece_height_slope(np, row, 0.0)[1] for row in table])
+    m = np.array([_piece_derivatives(np, row, 0.0)[1] for row in table])
     return dict(breaks=_breaks(table), joint_z=table[1:, 7], yc=table[:, 0], zc=table[:, 4],
                 radius=table[:, 8], y0=table[:, 1], z0=table[:, 5], m=m)
 
@@ -260,17 +264,22 @@ class UIC60(Profile):
         """Height [m] and slope [-] at ``y`` [m] of one analytic piece, continued beyond
         its joints (pieces 0..6 from the gauge flank to the field flank)."""
         y = jnp.asarray(y, dtype=jnp.float64)
-        return _piece_height_slope(jnp, self._table()[piece], y)
+        return _piece_derivatives(jnp, self._table()[piece], y)[:2]
 
-    def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
+    def height_derivatives(self, y: Float[ArrayLike, ""]) -> tuple[Array, Array, Array]:
+        """Height [m], slope [-] and second derivative [1/m] at ``y`` [m], in closed
+        form (zero second derivative on the end tangents outside the domain)."""
         y = jnp.asarray(y, dtype=jnp.float64)
         # Continue along the end tangent outside the domain; `where` rather than clip
         # keeps the derivatives exact at the ends themselves.
         y_in = jnp.where(y > self.y_max, self.y_max, jnp.where(y < self.y_min, self.y_min, y))
         table = self._table()
         index = jnp.sum((y_in > _breaks(table)).astype(jnp.int32))
-        h, s = _piece_height_slope(jnp, table[index], y_in)
-        return h + s * (y - y_in)
+        h, s, c = _piece_derivatives(jnp, table[index], y_in)
+        return h + s * (y - y_in), s, jnp.where(y == y_in, c, 0.0)
+
+    def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
+        return self.height_derivatives(y)[0]
 
 
 _NAMED_INCLINATIONS = {"1:40": 1.0 / 40.0, "1:20": 1.0 / 20.0, "none": 0.0, "0": 0.0}
