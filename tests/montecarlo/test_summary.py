@@ -43,7 +43,8 @@ def test_track_shifting_force_points_outward_for_a_flanging_outer_wheel():
     # Left curve: the rails push the wheelset to the left (inward), 20 kN on the flanging
     # right wheel and 3 kN on the left one. In lateral_force convention (towards the
     # wheel's own field side) that is +3 kN on the left wheel, -20 kN on the right one.
-    result = _wheels(lateral_force=np.array([[[3e3, -20e3]]]))
+    result = _wheels(lateral_force=np.array([[[3e3, -20e3]]]),
+                     vertical_force=np.array([[[60e3, 80e3]]]))
     assert track_shifting_force(result)[0, 0] == pytest.approx(-23e3)  # track pushed right
 
 
