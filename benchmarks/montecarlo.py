@@ -19,7 +19,7 @@ import subprocess
 import sys
 import time
 
-from jaxrail._devices import host_device_flags
+from jaxrail._devices import host_device_environment
 
 
 def measure(scenario_name, samples, duration, seed, device_counts):
@@ -81,7 +81,7 @@ def main():
                                  args.devices)))
         return
     env = dict(os.environ)
-    env["XLA_FLAGS"] = host_device_flags(2, env.get("XLA_FLAGS", ""))
+    env.update(host_device_environment(2, env))
     out = subprocess.run([sys.executable, __file__, "--child", "--scenario", args.scenario,
                           "--samples", str(args.samples), "--duration", str(args.duration),
                           "--seed", str(args.seed), "--devices", *map(str, args.devices)],

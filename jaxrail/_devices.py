@@ -1,26 +1,30 @@
 """Several XLA devices on one CPU, set up so that they run side by side.
 
 XLA shows one CPU device unless ``--xla_force_host_platform_device_count`` asks for
-more. Those devices share XLA's intra-op thread pool (a thread per core), and each
-device's program holds one of its threads while it runs; a batched LAPACK call (the LU
-of every member's equations of motion) splits its batch over the same pool and waits
-for it. With two devices on two cores each waits for the thread the other holds: one
-device stalls until the other's whole program ends, or both wait forever (seen here in
-the Monte Carlo study, with gdb: both pool threads inside LAPACK's getrf / gesdd).
-``--xla_cpu_multi_thread_eigen=false`` takes the pool away: each device runs its
-program, LAPACK calls included, on its own thread.
+more. Those devices share the CPU client's thread pool, a thread per core unless the
+environment variable ``NPROC`` sets another size, and each device's program holds one
+of its threads while it runs. A batched LAPACK call (the LU of every member's
+equations of motion) splits its batch over the same pool and waits for it
+(``jax::ParallelBatchMap``). With two devices on two cores each program waits for a
+thread the other holds: one device stalls until the other's program ends, or both wait
+forever (seen here with gdb: both pool threads inside ``ParallelBatchMap`` under
+LAPACK's ``getrf``; reproduced by a sharded loop of batched solves, which hangs at
+once with a 2-thread pool and runs with 4). A pool of one thread per core plus one per
+device leaves threads free for the batched kernels. ``--xla_cpu_multi_thread_eigen=false``
+(Eigen's own kernels single-threaded) is set too; on its own it does not prevent the
+hang.
 """
 
 import os
 
-
 FORCE_DEVICES = "--xla_force_host_platform_device_count"
 SINGLE_THREADED_OPS = "--xla_cpu_multi_thread_eigen=false"
+POOL_THREADS = "NPROC"  # read by XLA's CPU client for the size of its thread pool
 
 
 def host_device_flags(count: int, flags: str = "") -> str:
-    """``flags`` (an XLA_FLAGS value) with ``count`` host devices that run side by side
-    (any earlier device count replaced)."""
+    """``flags`` (an XLA_FLAGS value) with ``count`` host devices (any earlier device
+    count replaced)."""
     if int(count) < 1:
         raise ValueError(f"host devices: need a count >= 1, got {count}")
     kept = [f for f in flags.split() if not f.startswith((FORCE_DEVICES, SINGLE_THREADED_OPS))]
@@ -28,21 +32,38 @@ def host_device_flags(count: int, flags: str = "") -> str:
     return " ".join(kept + extra)
 
 
+def host_device_environment(count: int, environ=None) -> dict[str, str]:
+    """The environment variables (``XLA_FLAGS``, and ``NPROC`` for several devices) of
+    a process with ``count`` host devices that run side by side; ``environ`` (default
+    ``os.environ``) gives the flags to keep."""
+    environ = os.environ if environ is None else environ
+    updates = {"XLA_FLAGS": host_device_flags(count, environ.get("XLA_FLAGS", ""))}
+    if count > 1:
+        updates[POOL_THREADS] = str((os.cpu_count() or 1) + int(count))
+    return updates
+
+
 def use_host_devices(count: int) -> None:
-    """Ask XLA for ``count`` CPU devices that run side by side (sets ``XLA_FLAGS``).
-    Call it before anything runs on JAX (importing most of jaxrail already does):
-    XLA reads the flags once, when it starts; raises ``RuntimeError`` if it has."""
+    """Ask XLA for ``count`` CPU devices that run side by side (sets ``XLA_FLAGS`` and
+    ``NPROC``). Call it before anything runs on JAX (importing most of jaxrail already
+    does): XLA reads both once, when it starts; raises ``RuntimeError`` if it has."""
     from jax._src import xla_bridge
 
-    flags = host_device_flags(count, os.environ.get("XLA_FLAGS", ""))
+    updates = host_device_environment(count)
     if xla_bridge.backends_are_initialized():
         raise RuntimeError("use_host_devices: JAX has already started its devices; call it "
                            "before importing jaxrail's modules or running anything on JAX")
-    os.environ["XLA_FLAGS"] = flags
+    os.environ.update(updates)
+
+
+def pool_threads() -> int:
+    """Threads of the CPU client's pool: ``NPROC`` if it is a number, else the cores."""
+    value = os.environ.get(POOL_THREADS, "")
+    return int(value) if value.strip().isdigit() else (os.cpu_count() or 1)
 
 
 def devices_may_stall(devices) -> bool:
-    """True when ``devices`` are several CPU devices sharing XLA's thread pool (see the
-    module docstring), i.e. XLA_FLAGS lacks ``--xla_cpu_multi_thread_eigen=false``."""
+    """True when ``devices`` are several CPU devices whose programs can take every
+    thread of the shared pool (see the module docstring)."""
     cpu = [d for d in devices if d.platform == "cpu"]
-    return len(cpu) > 1 and SINGLE_THREADED_OPS not in os.environ.get("XLA_FLAGS", "")
+    return len(cpu) > 1 and pool_threads() <= len(cpu)

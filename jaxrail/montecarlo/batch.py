@@ -30,7 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.sharding import NamedSharding, PartitionSpec
 
-from .._devices import SINGLE_THREADED_OPS, devices_may_stall
+from .._devices import POOL_THREADS, devices_may_stall, pool_threads
 from ..identify.parameters import set_values
 from ..simulate import DerailmentLimits, SolverOptions, _compile, solve
 
@@ -112,10 +112,11 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
     time [s], 0 if cached; run time [s]; the chunk used, :func:`chunk_size`)."""
     devices = tuple(jax.devices() if devices is None else devices)
     if devices_may_stall(devices):
-        warnings.warn(f"{len(devices)} CPU devices share XLA's thread pool: a chunk may run "
-                      "its parts one after the other or hang; start the process with "
-                      "jaxrail.use_host_devices(N) (or XLA_FLAGS "
-                      f"{SINGLE_THREADED_OPS}), see docs/montecarlo.md", stacklevel=2)
+        warnings.warn(f"{len(devices)} CPU devices share XLA's thread pool of "
+                      f"{pool_threads()} threads: a chunk may run its parts one after the "
+                      "other or hang; start the process with jaxrail.use_host_devices(N) "
+                      f"(or set {POOL_THREADS} to the cores plus the devices), see "
+                      "docs/montecarlo.md", stacklevel=2)
     n = len(inputs[0])
     chunk = chunk_size(chunk, n, len(devices))
     bar = None

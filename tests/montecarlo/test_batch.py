@@ -16,7 +16,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from jaxrail._devices import host_device_flags
+from jaxrail._devices import host_device_environment
 from jaxrail.montecarlo import run_samples
 from jaxrail.results import summarize
 from jaxrail.scenarios import parse_scenario
@@ -119,7 +119,7 @@ def test_sharded_over_two_host_devices_equals_unsharded(batch, tmp_path):
                   open({str(out)!r}, "w"))
     """)
     env = dict(os.environ)
-    env["XLA_FLAGS"] = host_device_flags(2, env.get("XLA_FLAGS", ""))
+    env.update(host_device_environment(2, env))
     subprocess.run([sys.executable, "-c", script], env=env, check=True, timeout=1500)
     sharded = json.loads(out.read_text())
     assert sharded["devices"] == 2 and sharded["chunk"] == 4
