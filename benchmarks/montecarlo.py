@@ -6,10 +6,11 @@ prints JSON: per device count, the compile and run times [s] of the batch (one
 compiled call of all samples, sharded over the devices) and of the sequential loop
 (the unbatched simulation compiled once, then called per sample), the throughputs in
 simulated seconds per wall second, their ratio, and the largest difference between
-the two runs' wheelset lateral displacements [m]. The measurement runs in a child
-process started with two host devices that run side by side
-(:func:`jaxrail.use_host_devices`: XLA reads the flags once, at start); the batch runs
-there on the first device and then on both, the sequential loop once.
+the two runs' wheelset lateral displacements [m]. Each configuration runs in a child
+process started as it would be used: the sequential loop and the 1-device batch with
+the environment as given (XLA's defaults), the 2-device batch with two host devices
+that run side by side (:func:`jaxrail.use_host_devices`; XLA reads its flags once, at
+start).
 """
 
 import argparse
@@ -22,7 +23,7 @@ import time
 from jaxrail._devices import host_device_environment
 
 
-def measure(scenario_name, samples, duration, seed, device_counts):
+def measure(scenario_name, samples, duration, seed, device_counts, sequential):
     import jax
     import numpy as np
 
@@ -39,31 +40,38 @@ def measure(scenario_name, samples, duration, seed, device_counts):
     drawn = draw([parse_variation(f"speed={0.8 * scenario.speed}:{1.2 * scenario.speed}"),
                   parse_variation("misalignment=0:4e-3")], samples, seed=seed)
     options = scenario.solver_options(duration=duration)
-    one = jax.jit(lambda v, m: solve(vehicle, track, params, duration, v, m, options=options))
-    start = time.perf_counter()
-    one = one.lower(drawn["speed"][0], drawn["misalignment"][0]).compile()
-    sequential_compile = time.perf_counter() - start
-    start = time.perf_counter()
-    lateral = []
-    for v, m in zip(drawn["speed"], drawn["misalignment"]):
-        lateral.append(np.asarray(jax.block_until_ready(one(v, m)).wheelset_lateral))
-    sequential_run = time.perf_counter() - start
-    simulated = samples * duration
-    report = {"scenario": scenario_name, "samples": samples, "duration_s": duration,
-              "host_devices": len(jax.devices()), "sequential_compile_s": sequential_compile,
-              "sequential_run_s": sequential_run,
-              "sequential_throughput": simulated / sequential_run, "batches": []}
+    report = {"host_devices": len(jax.devices()), "batches": []}
+    if sequential:
+        one = jax.jit(lambda v, m: solve(vehicle, track, params, duration, v, m,
+                                         options=options))
+        start = time.perf_counter()
+        one = one.lower(drawn["speed"][0], drawn["misalignment"][0]).compile()
+        report["sequential_compile_s"] = time.perf_counter() - start
+        start = time.perf_counter()
+        lateral = []
+        for v, m in zip(drawn["speed"], drawn["misalignment"]):
+            lateral.append(np.asarray(jax.block_until_ready(one(v, m)).wheelset_lateral))
+        report["sequential_run_s"] = time.perf_counter() - start
+        report["sequential_lateral"] = np.stack(lateral).tolist()
     for k in device_counts:
         batch = run_samples(scenario, drawn, duration=duration, chunk=samples, built=built,
                             keep_results=True, devices=jax.devices()[:k])
-        difference = np.nanmax(np.abs(np.stack(lateral) - batch.results.wheelset_lateral))
         report["batches"].append({
             "devices": k, "statuses": batch.statuses, "compile_s": batch.compile_time_s,
-            "run_s": batch.run_time_s, "throughput": simulated / batch.run_time_s,
-            "over_sequential": sequential_run / batch.run_time_s,
-            "max_lateral_difference_m": float(difference)})
-        print(json.dumps(report["batches"][-1]), file=sys.stderr, flush=True)
+            "run_s": batch.run_time_s, "lateral": batch.results.wheelset_lateral.tolist()})
+        print(json.dumps({k: v for k, v in report["batches"][-1].items() if k != "lateral"}),
+              file=sys.stderr, flush=True)
     return report
+
+
+def child(args, env, device_counts, sequential):
+    """One configuration in a child process with environment ``env``."""
+    command = [sys.executable, __file__, "--child", "--scenario", args.scenario,
+               "--samples", str(args.samples), "--duration", str(args.duration),
+               "--seed", str(args.seed), "--devices", *map(str, device_counts)]
+    out = subprocess.run(command + (["--sequential"] if sequential else []), env=env,
+                         stdout=subprocess.PIPE, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def main():
@@ -75,19 +83,34 @@ def main():
     parser.add_argument("--devices", type=int, nargs="*", default=[1, 2],
                         help="device counts to run the batch on (at most 2)")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--sequential", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
         print(json.dumps(measure(args.scenario, args.samples, args.duration, args.seed,
-                                 args.devices)))
+                                 args.devices, args.sequential)))
         return
-    env = dict(os.environ)
-    env.update(host_device_environment(2, env))
-    out = subprocess.run([sys.executable, __file__, "--child", "--scenario", args.scenario,
-                          "--samples", str(args.samples), "--duration", str(args.duration),
-                          "--seed", str(args.seed), "--devices", *map(str, args.devices)],
-                         env=env, stdout=subprocess.PIPE, text=True, check=True)
-    report = json.loads(out.stdout.strip().splitlines()[-1])
-    report = {"benchmark": "montecarlo", "cores": os.cpu_count()} | report
+    import numpy as np
+
+    plain = child(args, dict(os.environ), [k for k in args.devices if k == 1], True)
+    runs = [plain]
+    if any(k > 1 for k in args.devices):
+        env = dict(os.environ)
+        env.update(host_device_environment(max(args.devices), env))
+        runs.append(child(args, env, [k for k in args.devices if k > 1], False))
+    simulated = args.samples * args.duration
+    sequential = np.array(plain["sequential_lateral"])
+    report = {"benchmark": "montecarlo", "cores": os.cpu_count(), "scenario": args.scenario,
+              "samples": args.samples, "duration_s": args.duration,
+              "sequential_compile_s": plain["sequential_compile_s"],
+              "sequential_run_s": plain["sequential_run_s"],
+              "sequential_throughput": simulated / plain["sequential_run_s"], "batches": []}
+    for run in runs:
+        for batch in run["batches"]:
+            lateral = np.array(batch.pop("lateral"))
+            report["batches"].append(batch | {
+                "host_devices": run["host_devices"], "throughput": simulated / batch["run_s"],
+                "over_sequential": plain["sequential_run_s"] / batch["run_s"],
+                "max_lateral_difference_m": float(np.nanmax(np.abs(sequential - lateral)))})
     print(json.dumps(report, indent=2))
 
 
