@@ -74,6 +74,18 @@ class Profile(eqx.Module):
         return self.second_derivative(y) / (1.0 + h1 * h1) ** 1.5
 
 
+class ClosedFormProfile(Profile):
+    """A profile that gives :meth:`height_derivatives` in closed form; its height is
+    the first of them."""
+
+    @abc.abstractmethod
+    def height_derivatives(self, y: Float[ArrayLike, ""]) -> tuple[Array, Array, Array]:
+        """``(height [m], slope [-], second derivative [1/m])`` at ``y`` [m]."""
+
+    def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
+        return self.height_derivatives(y)[0]
+
+
 class WheelProfile(eqx.Module):
     """A wheel: its contact surfaces and nominal rolling radius.
 

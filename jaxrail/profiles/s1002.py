@@ -42,7 +42,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._float64 import require_float64
-from ._base import Profile, WheelProfile
+from ._base import ClosedFormProfile, WheelProfile
 
 # Section table, mm (profiles.md section 1.2; signs as in the formulas there).
 _AA, _BA = 1.364323640, 0.066666667
@@ -169,7 +169,7 @@ def s1002_derivatives_mm(s_mm: Float[ArrayLike, ""]) -> tuple[Array, Array, Arra
     return piecewise_derivatives_mm(s, _JOINTS_ASCENDING, _ROWS_ASCENDING)
 
 
-class S1002(Profile):
+class S1002(ClosedFormProfile):
     """The S1002 wheel profile as a :class:`Profile` over ``(-0.0695, 0.060)`` m.
 
     ``height(y)`` [m] is the standard's ``F`` at ``S = 1000 y`` (see the module docstring
@@ -186,9 +186,6 @@ class S1002(Profile):
 
     def height_derivatives(self, y: Float[ArrayLike, ""]) -> tuple[Array, Array, Array]:
         return height_derivatives_from_mm(s1002_derivatives_mm, y)
-
-    def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
-        return self.height_derivatives(y)[0]
 
 
 def s1002(nominal_radius: float = 0.46) -> WheelProfile:

@@ -29,7 +29,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._float64 import require_float64
-from ._base import Profile, WheelProfile
+from ._base import ClosedFormProfile, WheelProfile
 from .s1002 import (
     _AE,
     _B_POLY,
@@ -73,7 +73,7 @@ def _flange_mm(s):
     return piecewise_derivatives_mm(s, _FLANGE_JOINTS, _FLANGE_ROWS)
 
 
-class SimplifiedTread(Profile):
+class SimplifiedTread(ClosedFormProfile):
     """Tread surface of the simplified S1002 over ``[S_x, 0.060]`` m (module docstring)."""
 
     def __init__(self):
@@ -86,11 +86,8 @@ class SimplifiedTread(Profile):
     def height_derivatives(self, y: Float[ArrayLike, ""]) -> tuple[Array, Array, Array]:
         return height_derivatives_from_mm(_tread_mm, y)
 
-    def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
-        return self.height_derivatives(y)[0]
 
-
-class SimplifiedFlange(Profile):
+class SimplifiedFlange(ClosedFormProfile):
     """Flange surface of the simplified S1002 over ``[-0.0695, S_x]`` m (module docstring)."""
 
     def __init__(self):
@@ -102,9 +99,6 @@ class SimplifiedFlange(Profile):
 
     def height_derivatives(self, y: Float[ArrayLike, ""]) -> tuple[Array, Array, Array]:
         return height_derivatives_from_mm(_flange_mm, y)
-
-    def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
-        return self.height_derivatives(y)[0]
 
 
 def simplified_s1002(nominal_radius: float = 0.46) -> WheelProfile:

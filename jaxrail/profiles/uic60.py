@@ -36,7 +36,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._float64 import require_float64
-from ._base import Profile
+from ._base import ClosedFormProfile
 
 _MM = 1e-3
 
@@ -195,7 +195,7 @@ def _domain(theta: float) -> tuple[float, float]:
     return float(y_min), float(y_max)
 
 
-class UIC60(Profile):
+class UIC60(ClosedFormProfile):
     """UIC60 / 60E1 rail head, canted by ``inclination`` toward the track centre.
 
     Fields:
@@ -277,9 +277,6 @@ class UIC60(Profile):
         index = jnp.sum((y_in > _breaks(table)).astype(jnp.int32))
         h, s, c = _piece_derivatives(jnp, table[index], y_in)
         return h + s * (y - y_in), s, jnp.where(y == y_in, c, 0.0)
-
-    def height(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
-        return self.height_derivatives(y)[0]
 
 
 _NAMED_INCLINATIONS = {"1:40": 1.0 / 40.0, "1:20": 1.0 / 20.0, "none": 0.0, "0": 0.0}
