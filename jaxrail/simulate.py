@@ -26,7 +26,8 @@ import numpy as np
 from .multibody import constraints, simulate_system
 from .track import to_track_coordinates, track_frame
 from .vehicles.initial import initial_state
-from .vehicles.vehicle import Vehicle, VehicleParams, contact_loads, wheelset_states
+from .vehicles.loads import OnlineContact, VehicleLoads, contact_loads
+from .vehicles.vehicle import Vehicle, VehicleParams, wheelset_states
 
 
 def _f64(x):
@@ -190,9 +191,9 @@ def _derailment_event(vehicle, track, limits, rest_height):
     return diffrax.Event(cond)
 
 
-def _wheel_outputs(vehicle, params, track, q, qdot):
+def _wheel_outputs(vehicle, params, track, q, qdot, model):
     """WheelOutputs at one state (leading shape (W, 2, P))."""
-    _, _, patches, forces = contact_loads(vehicle, params.contact, track, q, qdot)
+    _, _, patches, forces = contact_loads(vehicle, params.contact, track, q, qdot, model)
     position, _, _, _ = wheelset_states(vehicle, q, qdot)
     frames = jax.vmap(lambda r: track_frame(track, to_track_coordinates(track, r)[0]))(position)
     side = jnp.array([1.0, -1.0])[None, :]
@@ -208,25 +209,28 @@ def _wheel_outputs(vehicle, params, track, q, qdot):
 def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignment=0.0,
           s0=None, options: SolverOptions = SolverOptions(),
           limits: DerailmentLimits = DerailmentLimits(), solver=None, adjoint=None,
-          initial=None):
+          initial=None, contact_model=None):
     """The traceable core of :func:`simulate` (jit, vmap and grad it): returns a
     :class:`SimulationResult` without host timings. ``t1`` [s], ``speed`` [m/s] and
     ``misalignment`` [m] may be traced. ``initial``: ``(q0, qdot0)`` to start from
     instead of the static equilibrium (:func:`jaxrail.vehicles.initial_state`); wheel
-    lifts and vertical displacements are measured from the initial state."""
+    lifts and vertical displacements are measured from the initial state.
+    ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's search)."""
+    model = OnlineContact() if contact_model is None else contact_model
+    loads = VehicleLoads(vehicle, params.contact, track, model)
     if initial is None:
-        q0, qdot0 = initial_state(vehicle, params, track, speed, misalignment, s0)
+        q0, qdot0 = initial_state(vehicle, params, track, speed, misalignment, s0,
+                                  loads.model)
     else:
         q0, qdot0 = (jnp.asarray(x, dtype=jnp.float64) for x in initial)
     _, rest_vertical, _, rest_heights = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
-    external = lambda t, q, qdot: contact_loads(vehicle, params.contact, track, q, qdot)[:2]  # noqa: E731
     ts = jnp.linspace(0.0, t1, options.n_outputs)
     meter = diffrax.TqdmProgressMeter() if options.progress else None
     controller, dt0 = options.controller()
     sol = simulate_system(
         vehicle.system, params.system, q0, qdot0, t1, dt0=dt0,
         saveat=diffrax.SaveAt(ts=ts), rtol=options.rtol, atol=options.atol, solver=solver,
-        external=external, max_steps=options.max_steps, adjoint=adjoint, throw=False,
+        external=loads, max_steps=options.max_steps, adjoint=adjoint, throw=False,
         stepsize_controller=controller,
         event=_derailment_event(vehicle, track, limits, rest_heights), progress_meter=meter)
     q, qdot = sol.ys
@@ -236,7 +240,7 @@ def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignmen
     qdot_safe = jnp.where(valid[:, None], qdot, qdot0)
     lateral, vertical, yaw, _ = jax.vmap(
         lambda a, b: _wheelset_track_coordinates(vehicle, track, a, b))(q_safe, qdot_safe)
-    wheels = jax.lax.map(lambda y: _wheel_outputs(vehicle, params, track, *y),
+    wheels = jax.lax.map(lambda y: _wheel_outputs(vehicle, params, track, *y, loads.model),
                          (q_safe, qdot_safe))
     n_norm = vehicle.system.n_bodies
     violation = jax.vmap(lambda a, b: jnp.max(jnp.abs(
@@ -277,11 +281,12 @@ def _compile(function, *args, **kwargs):
 def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: float,
              misalignment: float = 0.0, s0=None, options: SolverOptions = SolverOptions(),
              limits: DerailmentLimits = DerailmentLimits(), initial=None,
-             solver=None) -> SimulationResult:
+             solver=None, contact_model=None) -> SimulationResult:
     """Run a vehicle along a track for ``t1`` [s] at ``speed`` [m/s] from static
     equilibrium, shifted ``misalignment`` [m] to the left (or from ``initial`` =
     ``(q0, qdot0)``); see the module docstring. ``solver``: a diffrax solver (default
-    Tsit5).
+    Tsit5). ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's
+    search, :class:`~jaxrail.vehicles.OnlineContact`).
 
     The two compiled programs (initial equilibrium, integration) are cached: a second
     call with the same vehicle structure and options does not recompile, whatever the
@@ -292,12 +297,14 @@ def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: f
     s0 = None if s0 is None else jnp.float64(s0)
     compile_time = 0.0
     if initial is None:
-        make, seconds = _compile(_initial_jit, vehicle, params, track, speed, misalignment, s0)
+        initial_args = (vehicle, params, track, speed, misalignment, s0, contact_model)
+        make, seconds = _compile(_initial_jit, *initial_args)
         compile_time += seconds
-        initial = make(vehicle, params, track, speed, misalignment, s0)
+        initial = make(*initial_args)
     initial = tuple(jnp.asarray(x, dtype=jnp.float64) for x in initial)
     args = (vehicle, track, params, t1, speed, misalignment, s0)
-    kwargs = dict(options=options, limits=limits, initial=initial, solver=solver)
+    kwargs = dict(options=options, limits=limits, initial=initial, solver=solver,
+                  contact_model=contact_model)
     run, seconds = _compile(_solve_jit, *args, **kwargs)
     compile_time += seconds
     result = run(*args, **kwargs)

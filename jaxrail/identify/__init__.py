@@ -57,33 +57,36 @@ def sample_period(times) -> float:
 
 
 def simulate_channels(vehicle, params, track, channels, times, *, speed, misalignment,
-                      duration, options: SolverOptions, s0=None, adjoint=None, cutoff=None):
+                      duration, options: SolverOptions, s0=None, adjoint=None, cutoff=None,
+                      contact_model=None):
     """Simulated channels (M, C) at ``times`` (M,) [s] as an acquisition sees them
     (traceable, differentiable): the simulation's outputs at ``OVERSAMPLING`` times the
     sample rate (more if ``options`` asks) through the Gaussian low-pass filter of
     :func:`.measurements.gaussian_window` with ``cutoff`` [Hz] (default
-    ``CUTOFF_FRACTION`` times the sample rate, the inverse of the times' mean spacing)."""
+    ``CUTOFF_FRACTION`` times the sample rate, the inverse of the times' mean spacing).
+    ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's search)."""
     period = sample_period(times)
     cutoff = CUTOFF_FRACTION / period if cutoff is None else cutoff
     n_outputs = int(round(duration / period * OVERSAMPLING)) + 1
     options = dataclasses.replace(options, n_outputs=max(options.n_outputs, n_outputs))
     result = solve(vehicle, track, params, duration, speed, misalignment, s0, options=options,
-                   adjoint=adjoint)
-    values = channel_values(channels, vehicle, params, track, result)
+                   adjoint=adjoint, contact_model=contact_model)
+    values = channel_values(channels, vehicle, params, track, result, contact_model)
     return sample(result.t, values, jnp.asarray(times), gaussian_window(cutoff))
 
 
 def simulation_residuals(vehicle, params, track, names, measurements: Measurements, *,
                          speed, misalignment, duration, options: SolverOptions, s0=None,
-                         forward=False, adjoint=None, cutoff=None):
+                         forward=False, adjoint=None, cutoff=None, contact_model=None):
     """``(values (k,), measured (M, C)) -> r (M C,)``: whitened residuals (simulated -
     measured) / noise, sample-major, of the simulation with the named parameters set
     to ``values``.
     ``forward``: use diffrax's forward-mode adjoint (for ``jax.jacfwd``) instead of
     recursive checkpointing (for ``jax.grad``; with fixed steps one checkpoint per step,
     else diffrax's default; ``adjoint`` overrides it). ``cutoff`` [Hz]: the
-    acquisition's low-pass (:func:`simulate_channels`). Samples after an early stop
-    (derailed, failed) count as 1e3 noise levels off."""
+    acquisition's low-pass and ``contact_model`` the contact model
+    (:func:`simulate_channels`). Samples after an early stop (derailed, failed) count as
+    1e3 noise levels off."""
     check_channels(measurements.channels, vehicle)
     for name in names:
         parameter(name).get(vehicle, params)  # raises for a parameter the vehicle lacks
@@ -99,7 +102,7 @@ def simulation_residuals(vehicle, params, track, names, measurements: Measuremen
                                       measurements.time, speed=speed,
                                       misalignment=misalignment, duration=duration,
                                       options=options, s0=s0, adjoint=adjoint,
-                                      cutoff=cutoff)
+                                      cutoff=cutoff, contact_model=contact_model)
         finite = jnp.isfinite(simulated)
         r = (jnp.where(finite, simulated, 0.0) - measured) / noise
         return jnp.where(finite, r, 1e3).ravel()

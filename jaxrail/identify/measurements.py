@@ -33,9 +33,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._files import write_text
-from ..multibody import accelerations
 from ..track import to_track_coordinates, track_frame
-from ..vehicles.vehicle import contact_loads
+from ..vehicles.loads import vehicle_accelerations
 
 _PATTERNS = [
     (re.compile(r"wheelset_(lateral|vertical|yaw)_([1-9]\d*)$"), "wheelset"),
@@ -75,24 +74,24 @@ def check_channels(names, vehicle) -> None:
         _parse(name, vehicle)
 
 
-def _lateral_acceleration(vehicle, params, track, t, q, qdot, body):
-    external = lambda t, q, qdot: contact_loads(vehicle, params.contact, track, q, qdot)[:2]  # noqa: E731
-    qddot, _ = accelerations(vehicle.system, params.system, t, q, qdot, external)
+def _lateral_acceleration(vehicle, params, track, t, q, qdot, body, model):
+    qddot = vehicle_accelerations(vehicle, params, track, t, q, qdot, model)
     position, acceleration = q[7 * body: 7 * body + 3], qddot[7 * body: 7 * body + 3]
     lateral = track_frame(track, to_track_coordinates(track, position)[0])[:, 1]
     return (acceleration - params.system.gravity) @ lateral
 
 
-def _acceleration_column(vehicle, params, track, result, body):
+def _acceleration_column(vehicle, params, track, result, body, model):
     """Lateral accelerometer reading (T,) of ``body`` at the output times."""
-    values = jax.lax.map(lambda x: _lateral_acceleration(vehicle, params, track, *x, body),
+    values = jax.lax.map(lambda x: _lateral_acceleration(vehicle, params, track, *x, body, model),
                          (result.t, result.q, result.qdot))
     return jnp.where(result.valid, values, jnp.nan)
 
 
-def channel_values(names, vehicle, params, track, result):
+def channel_values(names, vehicle, params, track, result, contact_model=None):
     """Values (T, C) of the channels ``names`` at the result's output times (traceable;
-    NaN after an early stop)."""
+    NaN after an early stop); accelerations with the loads of ``contact_model``
+    (:mod:`jaxrail.vehicles.loads`, default the paper's search)."""
     columns = []
     for name in names:
         kind, detail = _parse(name, vehicle)
@@ -102,7 +101,8 @@ def channel_values(names, vehicle, params, track, result):
             field = getattr(result.wheels, f"{detail[0]}_force")
             columns.append(field[:, detail[1], detail[2]])
         else:
-            columns.append(_acceleration_column(vehicle, params, track, result, detail[0]))
+            columns.append(_acceleration_column(vehicle, params, track, result, detail[0],
+                                                contact_model))
     return jnp.stack(columns, axis=1)
 
 

@@ -13,7 +13,12 @@ from .trailer import trailer as trailer
 from .trailer import trailer_values as trailer_values
 from .vehicle import Vehicle as Vehicle
 from .vehicle import VehicleParams as VehicleParams
-from .vehicle import contact_loads as contact_loads
+from .loads import OnlineContact as OnlineContact
+from .loads import VehicleLoads as VehicleLoads
+from .loads import contact_loads as contact_loads
+from .loads import vehicle_accelerations as vehicle_accelerations
+from .loads import wheelset_loads as wheelset_loads
 from .wheel_rail import ContactParameters as ContactParameters
 from .wheel_rail import PatchForces as PatchForces
+from .wheel_rail import patch_loads as patch_loads
 from .wheel_rail import wheelset_contact_loads as wheelset_contact_loads

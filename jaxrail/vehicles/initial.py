@@ -19,7 +19,7 @@ from ..multibody import quaternion as qt
 from ..multibody import velocities_from_twists
 from ..track import track_frame
 from .vehicle import Vehicle, VehicleParams
-from .wheel_rail import wheelset_contact_loads
+from .loads import wheelset_loads
 
 HEIGHT_BISECTIONS = 50  # from [r0/2, 3 r0/2]: 4e-16 m
 ROLL_BISECTIONS = 40  # from [-MAX_ROLL, MAX_ROLL]: 4e-14 rad
@@ -27,7 +27,7 @@ MAX_ROLL = 0.02  # [rad]
 STEP = 1e-7  # finite-difference step in height [m] and roll [rad]
 
 
-def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed):
+def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed, model):
     """Upward wheel-rail forces [N] (2,) (left, right wheel; track normal) on a wheelset
     at ``s`` [m], shifted ``lateral`` [m], its centre ``height`` [m] above the track
     plane, rolled by ``roll`` [rad], moving at ``speed`` [m/s] and spinning at speed /
@@ -37,9 +37,8 @@ def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed):
     position, rotation = wheelset_pose(track, s, lateral, height, roll)
     velocity = speed * rotation[:, 0]
     spin = (speed / vehicle.nominal_radius) * rotation[:, 1]
-    _, _, patches, forces = wheelset_contact_loads(
-        vehicle.wheel, vehicle.rail, track, vehicle.rail_offset, params.contact, position,
-        rotation, velocity, spin, vehicle.config)
+    _, _, patches, forces = wheelset_loads(vehicle, params.contact, track, position, rotation,
+                                           velocity, spin, model)
     up = track_frame(track, s)[:, 2]
     loads = jnp.sum(forces.force @ up, axis=1)
     weight = jnp.where(patches.active, forces.normal_force, 0.0)
@@ -48,11 +47,12 @@ def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed):
 
 
 def wheelset_rest_pose(vehicle: Vehicle, params: VehicleParams, track, s, lateral, load,
-                       speed=0.0):
+                       speed=0.0, model=None):
     """Centre height [m] above the track plane and roll [rad] at which each wheel of a
     wheelset at arc length ``s`` [m], shifted ``lateral`` [m] and rolling at ``speed``
     [m/s], carries ``load / 2`` [N]; and the rolling radius [m] there (to the middle
-    of the overlap, weighted by normal force).
+    of the overlap, weighted by normal force). ``model``: the contact model
+    (:mod:`jaxrail.vehicles.loads`, default the paper's search).
 
     Nested bisections without gradient: on the roll (within 20 mrad) for equal wheel
     loads, each with a bisection on the height for the total load. Then one Newton
@@ -63,7 +63,7 @@ def wheelset_rest_pose(vehicle: Vehicle, params: VehicleParams, track, s, latera
     frozen = jax.lax.stop_gradient((params, s, lateral, speed, load))
 
     def loads(p, h, roll):
-        return _wheel_loads(vehicle, p, track, frozen[1], frozen[2], h, roll, frozen[3])
+        return _wheel_loads(vehicle, p, track, frozen[1], frozen[2], h, roll, frozen[3], model)
 
     def residual_and_jacobian(p, pose):
         probes = pose + jnp.array([[0.0, 0.0], [STEP, 0.0], [0.0, STEP]])
@@ -104,13 +104,15 @@ def wheelset_rest_pose(vehicle: Vehicle, params: VehicleParams, track, s, latera
 
 
 def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalignment=0.0,
-                  s0=None):
+                  s0=None, model=None):
     """``(q0, qdot0)`` of the vehicle at rest on the track, rolling at ``speed`` [m/s].
 
     Arguments:
         s0: arc length [m] of the vehicle's reference point (default: the rearmost
             wheelset 5 m after the start of the track).
         misalignment: lateral shift [m] of the whole vehicle, positive left.
+        model: the contact model (:mod:`jaxrail.vehicles.loads`, default the paper's
+            search).
 
     All bodies move along the track at ``speed``; the wheelsets spin at ``speed /
     rolling radius``. The state is projected onto the joint constraints.
@@ -124,7 +126,7 @@ def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalig
     mass = params.system.bodies.mass
     load = -jnp.sum(mass) * params.system.gravity[2] / len(wheelsets)
     heights, rolls, radii = jax.vmap(lambda s: wheelset_rest_pose(
-        vehicle, params, track, s, misalignment, load, speed))(s0 + layout[wheelsets, 0])
+        vehicle, params, track, s, misalignment, load, speed, model))(s0 + layout[wheelsets, 0])
     lift = jnp.mean(heights) - vehicle.nominal_radius
 
     # per body: its own wheelset (wheelsets and axleboxes), or -1

@@ -20,7 +20,7 @@ from ..contact.search import SearchConfig
 from ..multibody import System, SystemParams
 from ..multibody import quaternion as qt
 from ..profiles import Profile, WheelProfile
-from .wheel_rail import ContactParameters, wheelset_contact_loads
+from .wheel_rail import ContactParameters
 
 
 class Vehicle(eqx.Module):
@@ -78,22 +78,3 @@ def wheelset_states(vehicle: Vehicle, q, qdot):
     rotation = jax.vmap(qt.rotation_matrix)(body[:, 3:])
     omega = 2.0 * jnp.einsum("wij,wj->wi", jax.vmap(qt.e_matrix)(body[:, 3:]), rate[:, 3:])
     return body[:, :3], rotation, rate[:, :3], omega
-
-
-def contact_loads(vehicle: Vehicle, contact: ContactParameters, track, q, qdot):
-    """Wheel-rail loads on all bodies and the contact details.
-
-    Returns ``(forces (n, 3) [N], torques (n, 3) [N m], patches, patch_forces)``: the
-    forces at the body centres and the torques, global (zero on bodies that are not
-    wheelsets), and per wheelset (leading axis W) the contact patches and their forces.
-    """
-    position, rotation, velocity, omega = wheelset_states(vehicle, q, qdot)
-    load = lambda r, a, v, w: wheelset_contact_loads(  # noqa: E731
-        vehicle.wheel, vehicle.rail, track, vehicle.rail_offset, contact, r, a, v, w,
-        vehicle.config)
-    force, moment, patches, patch_forces = jax.vmap(load)(position, rotation, velocity, omega)
-    n = vehicle.system.n_bodies
-    index = np.asarray(vehicle.wheelsets)
-    forces = jnp.zeros((n, 3)).at[index].set(force)
-    torques = jnp.zeros((n, 3)).at[index].set(moment)
-    return forces, torques, patches, patch_forces

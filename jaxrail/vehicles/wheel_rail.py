@@ -119,10 +119,31 @@ def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_ve
     return PatchForces(normal_force, fx, fy, xi, eta, phi, a, b, stiffness, force)
 
 
+def patch_loads(params: ContactParameters, patches, position, velocity, angular_velocity):
+    """Total wheel-rail force and moment on a wheelset from its contact patches.
+
+    Arguments:
+        params: :class:`ContactParameters`.
+        patches: the wheelset's :class:`jaxrail.contact.ContactPatches`, leading shape
+            ``(2, P)`` (left, right wheel; patch slots), from the paper's search or a
+            contact table.
+        position (3,): wheelset centre, global [m].
+        velocity (3,), angular_velocity (3,): of the wheelset, global [m/s, rad/s].
+
+    Returns ``(force (3,), moment (3,), patch_forces)``: the resultant force [N] and its
+    moment about the wheelset centre [N m], both global, and the per-patch forces.
+    """
+    one = lambda patch: _patch_forces(params, patch, position, velocity, angular_velocity)  # noqa: E731
+    forces = jax.vmap(jax.vmap(one))(patches)
+    arms = patches.rail_point - position
+    moment = jnp.sum(jnp.cross(arms, forces.force), axis=(0, 1))
+    return jnp.sum(forces.force, axis=(0, 1)), moment, forces
+
+
 def wheelset_contact_loads(wheel, rail, track, rail_offset, params: ContactParameters,
                            position, rotation, velocity, angular_velocity,
                            config: SearchConfig = SearchConfig(), s_guess=None):
-    """Total wheel-rail force and moment on a wheelset.
+    """Total wheel-rail force and moment on a wheelset, with the paper's search.
 
     Arguments:
         wheel, rail, track, rail_offset: as :func:`jaxrail.contact.search_wheelset`.
@@ -135,8 +156,5 @@ def wheelset_contact_loads(wheel, rail, track, rail_offset, params: ContactParam
     patches and per-patch forces for output.
     """
     patches = search_wheelset(wheel, rail, track, rail_offset, position, rotation, config, s_guess)
-    one = lambda patch: _patch_forces(params, patch, position, velocity, angular_velocity)  # noqa: E731
-    forces = jax.vmap(jax.vmap(one))(patches)
-    arms = patches.rail_point - position
-    moment = jnp.sum(jnp.cross(arms, forces.force), axis=(0, 1))
-    return jnp.sum(forces.force, axis=(0, 1)), moment, patches, forces
+    force, moment, forces = patch_loads(params, patches, position, velocity, angular_velocity)
+    return force, moment, patches, forces

@@ -1,0 +1,98 @@
+"""The loads on a vehicle's bodies: the one place where the right-hand side is assembled.
+
+Every user of the equations of motion (:mod:`jaxrail.simulate`, the static
+equilibrium, identification, Monte Carlo, the benchmarks) goes through
+:class:`VehicleLoads` and :func:`vehicle_accelerations`, so the right-hand side is
+written once:
+
+1. the wheelsets' poses and velocities from the state ``(q, qdot)``;
+2. the contact patches of each wheelset from a **contact model**
+   (:class:`OnlineContact`: the paper's search at every evaluation, the reference);
+3. per patch Hertz, the normal law and Polach (:func:`jaxrail.vehicles.wheel_rail.patch_loads`);
+4. the resultant force and moment on each wheelset, as loads on the bodies ``(n, 3)``
+   for eq. (19) (:func:`jaxrail.multibody.accelerations`).
+
+Loads are returned for every body of the system, so further sources (rail masses
+under the wheelsets, irregularities through the track) add their terms here.
+"""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..contact.search import search_wheelset
+from ..multibody import accelerations
+from .vehicle import Vehicle, VehicleParams, wheelset_states
+from .wheel_rail import ContactParameters, patch_loads
+
+
+class OnlineContact(eqx.Module):
+    """The paper's contact search (:func:`jaxrail.contact.search_wheelset`) at every
+    evaluation, with the vehicle's :class:`~jaxrail.contact.SearchConfig`."""
+
+    name = "online"
+
+    def wheelset_patches(self, vehicle: Vehicle, track, position, rotation):
+        """Contact patches ``(2, P)`` of the wheelset at ``position`` (3,) [m] with
+        body axes ``rotation`` (3, 3), global."""
+        return search_wheelset(vehicle.wheel, vehicle.rail, track, vehicle.rail_offset,
+                               position, rotation, vehicle.config)
+
+
+def _model(model):
+    return OnlineContact() if model is None else model
+
+
+def wheelset_loads(vehicle: Vehicle, contact: ContactParameters, track, position, rotation,
+                   velocity, angular_velocity, model=None):
+    """Wheel-rail force (3,) [N] and moment (3,) [N m] about the centre of one wheelset,
+    global, with its patches and patch forces: ``(force, moment, patches, forces)``.
+    ``model``: the contact model (default :class:`OnlineContact`)."""
+    patches = _model(model).wheelset_patches(vehicle, track, position, rotation)
+    force, moment, forces = patch_loads(contact, patches, position, velocity, angular_velocity)
+    return force, moment, patches, forces
+
+
+def contact_loads(vehicle: Vehicle, contact: ContactParameters, track, q, qdot, model=None):
+    """Wheel-rail loads on all bodies and the contact details.
+
+    Returns ``(forces (n, 3) [N], torques (n, 3) [N m], patches, patch_forces)``: the
+    forces at the body centres and the torques, global (zero on bodies that are not
+    wheelsets), and per wheelset (leading axis W) the contact patches and their forces.
+    ``model``: the contact model (default :class:`OnlineContact`).
+    """
+    position, rotation, velocity, omega = wheelset_states(vehicle, q, qdot)
+    load = lambda r, a, v, w: wheelset_loads(vehicle, contact, track, r, a, v, w, model)  # noqa: E731
+    force, moment, patches, patch_forces = jax.vmap(load)(position, rotation, velocity, omega)
+    n = vehicle.system.n_bodies
+    index = np.asarray(vehicle.wheelsets)
+    forces = jnp.zeros((n, 3)).at[index].set(force)
+    torques = jnp.zeros((n, 3)).at[index].set(moment)
+    return forces, torques, patches, patch_forces
+
+
+class VehicleLoads(eqx.Module):
+    """The loads on a vehicle's bodies as the ``external`` hook of
+    :func:`jaxrail.multibody.accelerations`: ``loads(t, q, qdot)`` returns forces and
+    torques ``(n, 3)`` [N, N m], global, at the body centres.
+
+    Fields: vehicle, contact (:class:`ContactParameters`, traced), track, model (the
+    contact model).
+    """
+
+    vehicle: Vehicle
+    contact: ContactParameters
+    track: object
+    model: object = eqx.field(default_factory=OnlineContact)
+
+    def __call__(self, t, q, qdot):
+        return contact_loads(self.vehicle, self.contact, self.track, q, qdot, self.model)[:2]
+
+
+def vehicle_accelerations(vehicle: Vehicle, params: VehicleParams, track, t, q, qdot,
+                          model=None):
+    """``qddot`` (7 n,) of eq. (19) with gravity, the suspension and the wheel-rail
+    loads of ``model`` (default :class:`OnlineContact`)."""
+    loads = VehicleLoads(vehicle, params.contact, track, _model(model))
+    return accelerations(vehicle.system, params.system, t, q, qdot, loads)[0]
