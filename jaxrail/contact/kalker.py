@@ -25,6 +25,23 @@ Between nu values CONTACT's rule is used: 1/c is quadratic in nu through nu = 0,
 Outside the table the result is blended (factor 1 - exp(-u^3), flat to second order at
 the table end) into CONTACT's asymptote at the actual nu, which is not quadratic in 1/c.
 Valid for 0 <= nu <= 0.5.
+
+Table (the default, ``method="table"``). The function above costs ~75 logarithms and
+exponentials per contact. Written as
+
+    c = exp(beta(x) log(c_asym(x, nu) W(nu).Pa(x))) / (W(nu).P(x)),
+
+with W the three Lagrange weights in nu, P = exp(-columns) and Pa = exp(-asymptote
+columns) (9 functions of x each) and beta the blend factor, it needs only the nu-free
+functions P, Pa, beta of x, which are tabulated as piecewise cubic Hermite interpolants
+(values and exact derivatives at the nodes, built with NumPy at import) on a uniform
+grid in x of step log(10)/230 with the table ends x = +-log 10 on nodes, for
+|x| <= 6.01 (a/b in [2.5e-3, 400]); beyond, the blend and the end corrections are 1 and
+0 to rounding and c = c_asym(x, nu) exactly. c_asym is algebraic in a/b, so what is
+left is 1 logarithm of a/b, 3 logarithms and 3 exponentials. C1 in a/b (the Hermite
+interpolant's second derivative jumps at the nodes, by ~1e-6 relative) and within
+1e-6 relative of ``method="direct"`` (the evaluation above, which stays the reference)
+for all a/b > 0 and 0 <= nu <= 0.5 (tests/contact/test_kalker_table.py).
 """
 
 import math
@@ -249,8 +266,120 @@ def _log_kalker(a_over_b, nu):
     return log_c + blend * (a_nu - _log_nu_interp(a_cols, weights))
 
 
+# --- the table (module docstring, "Table") ------------------------------------------------
+_GRID_STEP = _X_HI / 230.0  # ~0.01; the table ends +-log 10 are nodes
+_GRID_HALF = 600  # nodes on each side of x = 0: |x| <= 6.007
+_GRID_END = _GRID_HALF * _GRID_STEP
+METHODS = ("table", "direct")
+"""Evaluation methods of :func:`kalker_coefficients`: ``"table"`` (default), ``"direct"``."""
+
+
+def _columns_with_slopes(x):
+    """The 9 columns log c (spline inside the table, corrected asymptote outside) and the
+    9 asymptote columns (held constant inside the table), with x-derivatives. NumPy,
+    x a 1-D grid; returns four (x.size, 9) arrays."""
+    cols, dcols, acols, dacols = (np.zeros((x.size, 9)) for _ in range(4))
+    below, above = x < _X_LO, x > _X_HI
+    middle = ~(below | above)
+    xs = np.clip(x, _X_LO, _X_HI)
+    i = np.clip(np.searchsorted(_X, xs, side="right") - 1, 0, _X.size - 2)
+    t = xs - _X[i]
+    x_lo, x_hi = np.minimum(x, _X_LO), np.maximum(x, _X_HI)
+    u_lo, u_hi = _X_LO - x_lo, x_hi - _X_HI
+    for k in range(3):
+        for j, nu in enumerate(TABLE_NU):
+            col = 3 * k + j
+            c = _COEFS[col][i]
+            spline = c[:, 0] + t * (c[:, 1] + t * (c[:, 2] + t * c[:, 3]))
+            dspline = c[:, 1] + t * (2.0 * c[:, 2] + 3.0 * t * c[:, 3])
+            lo, hi = _asym_small(x_lo, nu)[k], _asym_large(x_hi, nu)[k]
+            decay = []
+            for u, s, d0 in ((u_lo, _S_LO[col], _D0_LO[col]), (u_hi, _S_HI[col], _D0_HI[col])):
+                e = d0 * np.exp(-(s * u + 0.5 * (s * u) ** 2 + (u / _DECAY_LENGTH) ** 3))
+                de_du = -(s + s * s * u + 3.0 * u * u / _DECAY_LENGTH**3) * e
+                decay.append((e, de_du))
+            (e_lo, de_lo), (e_hi, de_hi) = decay
+            cols[:, col] = np.where(below, lo[0] + e_lo, np.where(above, hi[0] + e_hi, spline))
+            dcols[:, col] = np.where(below, lo[1] - de_lo, np.where(above, hi[1] + de_hi, dspline))
+            # Inside the table the blend factor is 0 and the asymptote columns only have
+            # to be finite: the value at the nearer table end, slope 0.
+            acols[:, col] = np.where(x < 0.0, lo[0], hi[0])
+            dacols[:, col] = np.where(middle, 0.0, np.where(below, lo[1], hi[1]))
+    return cols, dcols, acols, dacols
+
+
+def _build_table():
+    """(nodes, 38) NumPy: P (9), Pa (9), beta at the grid nodes, then their slopes."""
+    x = np.arange(-_GRID_HALF, _GRID_HALF + 1) * _GRID_STEP
+    cols, dcols, acols, dacols = _columns_with_slopes(x)
+    p, pa = np.exp(-cols), np.exp(-acols)
+    u = np.maximum(x - _X_HI, 0.0) + np.maximum(_X_LO - x, 0.0)
+    beta = 1.0 - np.exp(-(u**3))
+    dbeta = 3.0 * u * u * np.exp(-(u**3)) * np.sign(x)
+    table = np.concatenate(
+        [p, pa, beta[:, None], -dcols * p, -dacols * pa, dbeta[:, None]], axis=1
+    )
+    table.setflags(write=False)
+    return table
+
+
+_TABLE_NODES = _build_table()
+
+
+def _asymptote(ratio, x, nu):
+    """CONTACT's asymptotic (c11, c22, c23) at the actual nu (stacked, axis 0): the
+    a << b form for x < 0, the a >> b form for x > 0, each at x clamped outside the
+    table (algebraic in a/b: no exponential)."""
+    small, large = x < _X_LO, x > _X_HI
+    g_lo = jnp.where(small, ratio, 0.1)
+    x_lo = jnp.where(small, x, _X_LO)
+    g_hi = jnp.where(large, ratio, 10.0)
+    x_hi = jnp.where(large, x, _X_HI)
+    one_minus = 1.0 - nu
+    c11_lo = (math.pi**2 / 4.0) / one_minus
+    c22_lo = (math.pi**2 / 4.0) * jnp.ones_like(x)
+    c23_lo = math.pi / (3.0 * one_minus) * jnp.sqrt(g_lo) * (1.0 + nu * (_LN16 - 5.0 - x_lo))
+    lam = _LN16 + 2.0 * x_hi
+    u = lam - 2.0 * nu
+    w = one_minus * lam + 2.0 * nu
+    two_pi_g = 2.0 * math.pi * g_hi
+    c11_hi = two_pi_g * (u + _KAPPA) / (u * u)
+    c22_hi = two_pi_g * (w + one_minus * _KAPPA) / (w * w)
+    c23_hi = two_pi_g * jnp.sqrt(g_hi) / (3.0 * (w - 2.0 * one_minus))
+    left = x < 0.0
+    return jnp.stack(
+        [jnp.where(left, c11_lo, c11_hi), jnp.where(left, c22_lo, c22_hi),
+         jnp.where(left, c23_lo, c23_hi)]
+    )
+
+
+def _kalker_table(a_over_b, nu):
+    """(c11, c22, c23) stacked on axis 0, from the table (module docstring)."""
+    x = jnp.log(a_over_b)
+    inside = jnp.abs(x) <= _GRID_END
+    grid = (jnp.where(inside, x, 0.0) + _GRID_END) / _GRID_STEP
+    i = jnp.clip(jnp.floor(grid), 0, 2 * _GRID_HALF - 1).astype(jnp.int32)
+    s = (grid - i)[..., None]
+    ends = jnp.asarray(_TABLE_NODES)[jnp.stack([i, i + 1], axis=-1)]  # (..., 2, 38)
+    f0, d0 = ends[..., 0, :19], ends[..., 0, 19:] * _GRID_STEP
+    f1, d1 = ends[..., 1, :19], ends[..., 1, 19:] * _GRID_STEP
+    r = 1.0 - s
+    f = r * r * ((1.0 + 2.0 * s) * f0 + s * d0) + s * s * ((3.0 - 2.0 * s) * f1 - r * d1)
+    weights = _nu_weights(nu)  # (3, ...)
+    p = jnp.moveaxis(f[..., :9].reshape(f.shape[:-1] + (3, 3)), -2, 0)  # (3 coeffs, ..., 3 nu)
+    pa = jnp.moveaxis(f[..., 9:18].reshape(f.shape[:-1] + (3, 3)), -2, 0)
+    beta = f[..., 18]
+    w_last = jnp.moveaxis(weights, 0, -1)  # (..., 3)
+    inv_c = jnp.sum(p * w_last, axis=-1)
+    asym = _asymptote(a_over_b, x, nu)
+    blended = jnp.exp(beta * jnp.log(asym * jnp.sum(pa * w_last, axis=-1))) / inv_c
+    return jnp.where(inside, blended, asym)
+
+
 def kalker_coefficients(
-    a_over_b: Float[ArrayLike, "*batch"], nu: Float[ArrayLike, "*batch"]
+    a_over_b: Float[ArrayLike, "*batch"],
+    nu: Float[ArrayLike, "*batch"],
+    method: str = "table",
 ) -> tuple[Float[Array, "*batch"], Float[Array, "*batch"], Float[Array, "*batch"]]:
     """Kalker's linear creepage coefficients ``(c11, c22, c23)`` [-].
 
@@ -261,12 +390,22 @@ def kalker_coefficients(
       0.1 ... 10, beyond it the coefficients join CONTACT's asymptotes smoothly.
     - `nu`: Poisson's ratio [-], 0 <= nu <= 0.5 (combined value of the two bodies).
 
+    - `method`: ``"table"`` (default: tabulated, C1, within 1e-6 relative of
+      ``"direct"``) or ``"direct"`` (the defining evaluation: C2, reproduces the table
+      rows exactly). See the module docstring.
+
     Arguments broadcast against each other; results have the broadcast shape.
-    C2-smooth in ``a/b`` and polynomial in ``nu`` (see the module docstring), so
-    jit/vmap/grad-safe. The table rows are reproduced exactly.
+    Smooth in ``a/b`` and polynomial in ``nu`` (see the module docstring), so
+    jit/vmap/grad-safe.
     """
     a_over_b = jnp.asarray(a_over_b, dtype=jnp.float64)
     nu = jnp.asarray(nu, dtype=jnp.float64)
+    if method == "table":
+        a_over_b, nu = jnp.broadcast_arrays(a_over_b, nu)
+        out = _kalker_table(a_over_b, nu)
+        return out[0], out[1], out[2]
+    if method != "direct":
+        raise ValueError(f"kalker_coefficients: method must be one of {METHODS}, got {method!r}")
     out = jnp.exp(_log_kalker(a_over_b, nu))
     return out[..., 0], out[..., 1], out[..., 2]
 

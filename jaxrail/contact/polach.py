@@ -111,6 +111,7 @@ def polach(
     parameters: PolachParameters | None = None,
     rolling_speed: Float[ArrayLike, "*batch"] | None = None,
     coefficients: tuple | None = None,
+    kalker_method: str = "table",
 ) -> tuple[Float[Array, "*batch"], Float[Array, "*batch"]]:
     """Tangential creep forces ``(fx, fy)`` [N] on the wheel, Polach's method with spin.
 
@@ -128,6 +129,9 @@ def polach(
       the falling friction; pass 0.0 if B = 0).
     - `coefficients`: optional ``(c11, c22, c23)`` to use instead of
       :func:`~jaxrail.contact.kalker.kalker_coefficients` at ``a/b``.
+    - `kalker_method`: ``method`` of
+      :func:`~jaxrail.contact.kalker.kalker_coefficients` (``"table"``, the default,
+      or ``"direct"``).
 
     **Returns** ``(fx, fy)``: longitudinal and lateral force on the wheel [N] in the
     contact frame (t, l), Kalker's sign convention (opposing the creepage). The spin
@@ -153,7 +157,7 @@ def polach(
     has_area = (a > 0.0) & (b > 0.0)
     ratio = jnp.where(has_area, a / jnp.where(has_area, b, 1.0), 1.0)
     if coefficients is None:
-        c11, c22, c23 = kalker_coefficients(ratio, nu)
+        c11, c22, c23 = kalker_coefficients(ratio, nu, method=kalker_method)
     else:
         c11, c22, c23 = (_f64(c) for c in coefficients)
     ab = a * b

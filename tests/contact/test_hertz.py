@@ -1,5 +1,9 @@
 """Hertz contact: sphere limit, the m/n table, an independent scipy solution, smoothness
-through the sphere and out to extreme curvature ratios, symmetry, gradients, edges."""
+through the sphere and out to extreme curvature ratios, symmetry, gradients, edges.
+
+These test the exact path (``method="exact"``, the Newton solve with elliptic
+integrals), the reference; the default tabulated path is tested against it in
+test_hertz_table.py."""
 
 import equinox as eqx
 import jax
@@ -26,12 +30,12 @@ def _fields(c):
 
 
 # One compiled batch evaluator and one compiled batch Jacobian, shared by all tests.
-_hertz_batch = jax.jit(jax.vmap(lambda n, a, b, g, nu: _fields(hertz(n, a, b, g, nu))))
-_hertz_jac = jax.jit(
-    jax.vmap(
-        jax.jacfwd(lambda n, a, b, g, nu: _fields(hertz(n, a, b, g, nu)), argnums=(0, 1, 2, 3, 4))
-    )
-)
+def _exact(n, a, b, g, nu):
+    return _fields(hertz(n, a, b, g, nu, method="exact"))
+
+
+_hertz_batch = jax.jit(jax.vmap(_exact))
+_hertz_jac = jax.jit(jax.vmap(jax.jacfwd(_exact, argnums=(0, 1, 2, 3, 4))))
 
 
 _BATCH = 2048
@@ -182,7 +186,9 @@ def test_consistency_of_fields():
     np.testing.assert_allclose(approach, (n / stiffness) ** (2 / 3), rtol=1e-13)
     np.testing.assert_allclose(p0, 3 * n / (2 * np.pi * a * b), rtol=1e-13)
     np.testing.assert_allclose(
-        jax.vmap(hertz_stiffness)(a_curv, b_curv, jnp.full(4, G_STEEL), jnp.full(4, NU_STEEL)),
+        jax.vmap(lambda *args: hertz_stiffness(*args, method="exact"))(
+            a_curv, b_curv, jnp.full(4, G_STEEL), jnp.full(4, NU_STEEL)
+        ),
         stiffness,
         rtol=1e-14,
     )
@@ -282,7 +288,7 @@ def test_zero_load_and_sphere_are_finite():
     np.testing.assert_array_equal(out[:3, [0, 1, 2, 4]], 0.0)
     assert np.all(out[:3, 3] > 0)
     # Extreme curvature ratio 1e12: still a finite, very long ellipse.
-    coeffs = hertz_coefficients(1.0, 1e12)
+    coeffs = hertz_coefficients(1.0, 1e12, method="exact")
     assert bool(jnp.isfinite(coeffs.m)) and float(coeffs.a_over_c0 / coeffs.b_over_c0) > 1e5
 
 
@@ -321,7 +327,7 @@ def test_convex_curvature_sign_convention():
 def test_hertz_from_curvatures():
     n, r = 5e4, 0.46
     kappa_rail = 1 / 0.3
-    tread = hertz_from_curvatures(n, r, 0.0, kappa_rail, contact_angle=0.0)
+    tread = hertz_from_curvatures(n, r, 0.0, kappa_rail, contact_angle=0.0, method="exact")
     expected = _run(n, 0.5 / r, 0.5 * kappa_rail)[()]
     np.testing.assert_allclose(np.asarray(_fields(tread)), expected, rtol=1e-13)
     # A concave wheel (hollow tread, kappa < 0) lowers B: a wider, more conformal and
@@ -331,7 +337,9 @@ def test_hertz_from_curvatures():
     assert float(hollow.stiffness) > float(tread.stiffness)
     assert float(hollow.p0) < float(tread.p0)
     # Contact angle: A = cos(gamma) / (2 r).
-    flange = hertz_from_curvatures(n, r, -1 / 0.015, 1 / 0.013, contact_angle=1.2)
+    flange = hertz_from_curvatures(
+        n, r, -1 / 0.015, 1 / 0.013, contact_angle=1.2, method="exact"
+    )
     expected = _run(n, 0.5 * np.cos(1.2) / r, 0.5 * (1 / 0.013 - 1 / 0.015))[()]
     np.testing.assert_allclose(np.asarray(_fields(flange)), expected, rtol=1e-13)
 
@@ -340,7 +348,7 @@ def test_conformal_contact_is_clipped_not_nan():
     n, r = 5e4, 0.46
     a_curv = 0.5 / r
     for kappa_wheel in (-1 / 0.3, -1 / 0.25):  # B = 0 and B < 0
-        c = hertz_from_curvatures(n, r, kappa_wheel, 1 / 0.3, contact_angle=0.0)
+        c = hertz_from_curvatures(n, r, kappa_wheel, 1 / 0.3, contact_angle=0.0, method="exact")
         expected = _run(n, a_curv, 1e-3 * a_curv)[()]
         np.testing.assert_allclose(np.asarray(_fields(c)), expected, rtol=1e-13)
     grad_b = jax.jit(jax.vmap(jax.grad(lambda k: hertz_from_curvatures(n, r, k, 1 / 0.3).b)))

@@ -1,4 +1,7 @@
-"""Kalker coefficients: table, nu interpolation, smoothness, asymptotes, AD."""
+"""Kalker coefficients: table, nu interpolation, smoothness, asymptotes, AD.
+
+These test the defining evaluation (``method="direct"``: spline and asymptotes), the
+reference; the default tabulated path is tested against it in test_kalker_table.py."""
 
 import math
 
@@ -9,7 +12,12 @@ import pytest
 from scipy.interpolate import CubicSpline
 
 from jaxrail.contact import kalker
-from jaxrail.contact.kalker import kalker_asymptotes, kalker_coefficients
+from jaxrail.contact.kalker import kalker_asymptotes
+from jaxrail.contact.kalker import kalker_coefficients as _kalker_coefficients
+
+
+def kalker_coefficients(a_over_b, nu):
+    return _kalker_coefficients(a_over_b, nu, method="direct")
 
 # Printed table of reference/contact-mechanics.md 4.1 (independent copy): a/b, then
 # c11, c22, c23 at nu = 0, .25, .5, then the nu = 0.28 and 0.30 columns (CONTACT's rule).

@@ -305,3 +305,16 @@ def test_parameter_sets():
     # coefficients override: the linear law follows the given c11
     f = polach(Q, MU, A, B, 1e-9, 0.0, 0.0, coefficients=(5.0, 4.0, 2.0))
     assert float(f[0]) == pytest.approx(-G * A * B * 5.0 * 1e-9, rel=1e-6)
+
+
+def test_tabulated_kalker_coefficients_match_direct():
+    # The default tabulated coefficients (test_kalker_table.py) against the defining
+    # evaluation, through the whole force law: tread-like and flange-like ellipses.
+    a = np.array([6e-3, 3e-3, 1.5e-3, 8e-3])
+    b = np.array([4e-3, 6e-3, 3e-2, 1e-4])
+    args = (Q, MU, a, b, 2e-3, -1e-3, 0.5, G, NU)
+    table = np.array(jax.jit(lambda: jnp.stack(polach(*args)))())
+    direct = np.array(jax.jit(lambda: jnp.stack(polach(*args, kalker_method="direct")))())
+    np.testing.assert_allclose(table, direct, rtol=5e-7)
+    with pytest.raises(ValueError, match="method"):
+        polach(*args, kalker_method="exact")
