@@ -31,6 +31,7 @@ from .joints import Spherical as Spherical
 from .system import System as System
 from .system import SystemParams as SystemParams
 from .system import accelerations as accelerations
+from .system import accelerations_dense as accelerations_dense
 from .system import angular_momentum as angular_momentum
 from .system import build_system as build_system
 from .system import consistent_initial_conditions as consistent_initial_conditions

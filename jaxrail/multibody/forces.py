@@ -34,7 +34,6 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import quaternion as qt
-from .bodies import D, X_I, X_J, Y_I, Y_J, Z_I, Z_J, Jet, pair_dots, pair_kinematics
 from .joints import body_selector, ground_extended, place_bodies, select_bodies
 
 
@@ -177,19 +176,19 @@ class BumpStopParams(eqx.Module):
 # ---- one element: deformation coordinates, law, potential ---------------------
 
 
-def _kinematics(qi, qj, vi, vj, e, axes_i, axes_j):
-    return pair_kinematics(qi, qj, vi, vj, e.point_i, axes_i, e.point_j, axes_j)
+def _separation(qi, qj, e):
+    """(A_i, A_j, d = r_Pj - r_Pi (3,) [m], global) of one element's two points."""
+    a_i, a_j = qt.rotation_matrix(qi[3:]), qt.rotation_matrix(qj[3:])
+    d = qj[:3] + qt.matvec(a_j, e.point_j) - qi[:3] - qt.matvec(a_i, e.point_i)
+    return a_i, a_j, d
 
 
-def _spring_coords(qi, qj, vi, vj, e):
-    eye = jnp.eye(3)
-    d2 = pair_dots(_kinematics(qi, qj, vi, vj, e, eye, eye), ((D, D),))
-    pos = d2.value > 0.0
-    length = jnp.sqrt(jnp.where(pos, d2.value, 1.0))
-    # dL = d(d2) / (2 L); at zero length the direction is undefined: no force.
-    inv = jnp.where(pos, 0.5 / length, 0.0)
-    return Jet(jnp.where(pos, length, 0.0), d2.jac * inv[:, None], d2.rate * inv,
-               jnp.zeros(1))
+def _spring_coords(qi, qj, e):
+    _, _, d = _separation(qi, qj, e)
+    d2 = qt.dot(d, d)[None]
+    pos = d2 > 0.0
+    # At zero length the direction is undefined: no force (zero derivative).
+    return jnp.where(pos, jnp.sqrt(jnp.where(pos, d2, 1.0)), 0.0)
 
 
 def _spring_law(s, sdot, e):
@@ -200,25 +199,15 @@ def _spring_potential(s, e):
     return 0.5 * e.stiffness * jnp.sum((s - e.free_length) ** 2)
 
 
-# u = (D . X_I, D . Y_I, D . Z_I); theta = vee(skew part of B_i^T B_j) with
-# (B_i^T B_j)_ab = (axis a of i) . (axis b of j): theta = (plus - minus) / 2.
-_BUSHING_PAIRS = (
-    (D, X_I), (D, Y_I), (D, Z_I),
-    (Z_I, Y_J), (X_I, Z_J), (Y_I, X_J),  # plus
-    (Y_I, Z_J), (Z_I, X_J), (X_I, Y_J),  # minus
-)
-_BUSHING_COMBINE = np.zeros((6, 9))
-_BUSHING_COMBINE[:3, :3] = np.eye(3)
-_BUSHING_COMBINE[3:, 3:6] = 0.5 * np.eye(3)
-_BUSHING_COMBINE[3:, 6:] = -0.5 * np.eye(3)
-
-
-def _bushing_coords(qi, qj, vi, vj, e):
-    k = _kinematics(qi, qj, vi, vj, e, e.frame_i.T, e.frame_j.T)
-    dots = pair_dots(k, _BUSHING_PAIRS)
-    c = jnp.asarray(_BUSHING_COMBINE)
-    return Jet(qt.matvec(c, dots.value), qt.matmul(c, dots.jac),
-               qt.matvec(c, dots.rate), qt.matvec(c, dots.bias))
+def _bushing_coords(qi, qj, e):
+    # u = B_i^T d; theta = vee(skew part of C), C = B_i^T B_j:
+    # theta = (C_zy - C_yz, C_xz - C_zx, C_yx - C_xy) / 2.
+    a_i, a_j, d = _separation(qi, qj, e)
+    b_i, b_j = qt.matmul(a_i, e.frame_i), qt.matmul(a_j, e.frame_j)
+    u = jnp.sum(b_i * d[:, None], axis=0)
+    c = jnp.sum(b_i[:, :, None] * b_j[:, None, :], axis=0)
+    theta = 0.5 * jnp.stack([c[2, 1] - c[1, 2], c[0, 2] - c[2, 0], c[1, 0] - c[0, 1]])
+    return jnp.concatenate([u, theta])
 
 
 def _bushing_law(s, sdot, e):
@@ -229,10 +218,10 @@ def _bushing_potential(s, e):
     return jnp.sum(0.5 * e.stiffness * s**2 + e.preload * s)
 
 
-def _bump_coords(qi, qj, vi, vj, e):
-    axis = e.axis_i / jnp.sqrt(qt.dot(e.axis_i, e.axis_i))
-    axes = jnp.broadcast_to(axis, (3, 3))
-    return pair_dots(_kinematics(qi, qj, vi, vj, e, axes, jnp.eye(3)), ((D, X_I),))
+def _bump_coords(qi, qj, e):
+    a_i, _, d = _separation(qi, qj, e)
+    axis = qt.matvec(a_i, e.axis_i / jnp.sqrt(qt.dot(e.axis_i, e.axis_i)))
+    return qt.dot(axis, d)[None]
 
 
 def _bump_law(s, sdot, e):
@@ -255,16 +244,20 @@ FORCE_KINDS = {
 
 def element_deformation(kind: str, qi, qj, e) -> Array:
     """Deformation coordinates s of one element of `kind` (see module docstring)."""
-    zero = jnp.zeros_like(qi)
-    return FORCE_KINDS[kind][0](qi, qj, zero, zero, e).value
+    return FORCE_KINDS[kind][0](qi, qj, e)
 
 
 def _one_element(kind, qi, qj, vi, vj, e):
+    """Generalized forces (g_i (7,), g_j (7,)) of one element: -(ds/dq)^T F(s, sdot),
+    sdot and the transpose product by forward and reverse AD of s(q_i, q_j)."""
     coords, law, _ = FORCE_KINDS[kind]
-    s = coords(qi, qj, vi, vj, e)
-    f = law(s.value, s.rate, e)
-    g = -qt.matvec(s.jac.T, f)
-    gi, gj = g[:7], g[7:]
+
+    def s_of(qi, qj):
+        return coords(qi, qj, e)
+
+    s, pullback = jax.vjp(s_of, qi, qj)
+    sdot = jax.jvp(s_of, (qi, qj), (vi, vj))[1]
+    gi, gj = pullback(-law(s, sdot, e))
     gi = jnp.concatenate([gi[:3], _tangent(qi[3:], gi[3:])])
     gj = jnp.concatenate([gj[:3], _tangent(qj[3:], gj[3:])])
     return gi, gj
@@ -293,8 +286,7 @@ def element_potential(kind: str, body_i, body_j, e, q) -> Float[Array, ""]:
     n = q.shape[0] // 7
     coords, _, potential = FORCE_KINDS[kind]
     q_ext = ground_extended(q.reshape(n, 7))
-    zero = jnp.zeros(7)
-    v = jax.vmap(lambda a, b, p: potential(coords(a, b, zero, zero, p).value, p))(
+    v = jax.vmap(lambda a, b, p: potential(coords(a, b, p), p))(
         select_bodies(body_selector(body_i, n), q_ext),
         select_bodies(body_selector(body_j, n), q_ext), e,
     )

@@ -15,9 +15,11 @@ j). The joint axis of revolute and prismatic joints is z.
 Each equation is built from body points and body axes and their dot products as a
 `Jet` (bodies.pair_kinematics): value, Jacobian over the 14 coordinates (q_i, q_j),
 rate, and the bias (Phi_q qdot)_q qdot, all analytic (A(p) is quadratic in p), so
-gamma = -bias. (Tests check them against jax.jacfwd and finite differences.) One joint
-is written once, vmapped over all joints of a kind and placed into the global matrices
-with constant one-hot products. The normalisation constraints p_i^T p_i - 1 = 0 (one
+gamma = -bias (`joint_jet`; tests check them against jax.jacfwd and finite differences).
+`joint_terms`, on the right-hand side, differentiates the plain `joint_phi` by AD
+instead (fewer operations than the 14-column Jets). One joint is written once,
+vmapped over all joints of a kind and placed into the global matrices with constant
+one-hot products. The normalisation constraints p_i^T p_i - 1 = 0 (one
 per body) come first in Phi.
 """
 
@@ -30,6 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from . import quaternion as qt
 from .bodies import D, X_I, X_J, Y_I, Y_J, Z_I, Jet, pair_dots, pair_kinematics
 
 GROUND = -1
@@ -170,9 +173,38 @@ def joint_jet(kind: str, qi, qj, vi, vj, jp) -> Jet:
 
 
 def joint_phi(kind: str, qi, qj, jp) -> Array:
-    """Phi (neq,) of one joint of `kind` from q_i (7,), q_j (7,) (unbatched params)."""
-    zero = jnp.zeros_like(qi)
-    return joint_jet(kind, qi, qj, zero, zero, jp).value
+    """Phi (neq,) of one joint of `kind` from q_i (7,), q_j (7,) (unbatched params).
+
+    Written directly from the two bodies' points and axes (the same equations as
+    `joint_jet`, without its Jacobian): `joint_terms` differentiates it.
+    """
+    _, coincide, pairs = JOINT_KINDS[kind]
+    a_i, a_j = qt.rotation_matrix(qi[3:]), qt.rotation_matrix(qj[3:])
+    d = qj[:3] + qt.matvec(a_j, jp.point_j) - qi[:3] - qt.matvec(a_i, jp.point_i)
+    axes_i = qt.matmul(a_i, jp.frame_i)  # columns: the joint axes, global
+    axes_j = qt.matmul(a_j, jp.frame_j)
+    rows = {X_I: axes_i[:, 0], Y_I: axes_i[:, 1], Z_I: axes_i[:, 2],
+            X_J: axes_j[:, 0], Y_J: axes_j[:, 1], D: d}
+    parts = [-d] if coincide else []
+    if pairs:
+        parts.append(jnp.stack([qt.dot(rows[a], rows[b]) for a, b in pairs]))
+    return jnp.concatenate(parts)
+
+
+def _joint_terms_one(kind, qi, qj, vi, vj, jp):
+    """(Phi, Phi_q (neq, 14), Phidot, gamma) of one joint, by AD of `joint_phi`:
+    Phi_q by forward mode, gamma = -(Phi_q qdot)_q qdot as the second derivative
+    of Phi along qdot."""
+    x, v = jnp.concatenate([qi, qj]), jnp.concatenate([vi, vj])
+
+    def phi(x):
+        return joint_phi(kind, x[:7], x[7:], jp)
+
+    def phidot(x):
+        return jax.jvp(phi, (x,), (v,))
+
+    (value, rate), (_, bias) = jax.jvp(phidot, (x,), (v,))
+    return value, jax.jacfwd(phi)(x), rate, -bias
 
 
 def ground_extended(x):
@@ -217,15 +249,15 @@ def joint_terms(kind: str, body_i, body_j, jp: JointParams, q, qdot):
     sel_i, sel_j = body_selector(body_i, n), body_selector(body_j, n)
     q_ext = ground_extended(q.reshape(n, 7))
     v_ext = jnp.concatenate([qdot.reshape(n, 7), jnp.zeros((1, 7))], axis=0)
-    jet = jax.vmap(lambda qi, qj, vi, vj, p: joint_jet(kind, qi, qj, vi, vj, p))(
+    value, jac, rate, gamma = jax.vmap(
+        lambda qi, qj, vi, vj, p: _joint_terms_one(kind, qi, qj, vi, vj, p))(
         select_bodies(sel_i, q_ext), select_bodies(sel_j, q_ext),
         select_bodies(sel_i, v_ext), select_bodies(sel_j, v_ext), jp,
     )
-    phi_q = (place_bodies(sel_i, jet.jac[..., :7])
-             + place_bodies(sel_j, jet.jac[..., 7:]))
-    k, neq = jet.value.shape
+    phi_q = place_bodies(sel_i, jac[..., :7]) + place_bodies(sel_j, jac[..., 7:])
+    k, neq = value.shape
     phi_q = phi_q[:, :, :n, :].reshape(k * neq, 7 * n)  # the ground's columns dropped
-    return (jet.value.reshape(-1), phi_q, jet.rate.reshape(-1), -jet.bias.reshape(-1))
+    return value.reshape(-1), phi_q, rate.reshape(-1), gamma.reshape(-1)
 
 
 def normalization_terms(q, qdot):

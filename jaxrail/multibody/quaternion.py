@@ -87,9 +87,18 @@ def vee(m: Float[ArrayLike, "3 3"]) -> Float[Array, "3"]:
 
 
 def rotation_matrix(p: Float[ArrayLike, "4"]) -> Float[Array, "3 3"]:
-    """A(p): body-to-global rotation matrix (3, 3); orthogonal only if |p| = 1."""
-    p = _f64(p)
-    return matvec(matvec(jnp.asarray(_A_TENSOR), p), p) - jnp.eye(3)
+    """A(p): body-to-global rotation matrix (3, 3); orthogonal only if |p| = 1.
+
+    Written entry by entry (the same quadratic form as Q(p, p) - I, a tenth of the
+    products of contracting `_A_TENSOR`)."""
+    e0, e1, e2, e3 = jnp.moveaxis(_f64(p), -1, 0)
+    d = 2.0 * e0 * e0 - 1.0
+    rows = (
+        (d + 2.0 * e1 * e1, 2.0 * (e1 * e2 - e0 * e3), 2.0 * (e1 * e3 + e0 * e2)),
+        (2.0 * (e1 * e2 + e0 * e3), d + 2.0 * e2 * e2, 2.0 * (e2 * e3 - e0 * e1)),
+        (2.0 * (e1 * e3 - e0 * e2), 2.0 * (e2 * e3 + e0 * e1), d + 2.0 * e3 * e3),
+    )
+    return jnp.stack([jnp.stack(r, axis=-1) for r in rows], axis=-2)
 
 
 def rotation_matrix_rate(
@@ -110,7 +119,9 @@ def rotation_tensor(p: Float[ArrayLike, "4"]) -> Float[Array, "3 3 4"]:
 
 def g_matrix(p: Float[ArrayLike, "4"]) -> Float[Array, "3 4"]:
     """Nikravesh's G(p) (3, 4): omega' = 2 G pdot (body frame)."""
-    return matvec(jnp.asarray(_G_TENSOR), _f64(p))
+    e0, e1, e2, e3 = jnp.moveaxis(_f64(p), -1, 0)
+    rows = ((-e1, e0, e3, -e2), (-e2, -e3, e0, e1), (-e3, e2, -e1, e0))
+    return jnp.stack([jnp.stack(r, axis=-1) for r in rows], axis=-2)
 
 
 def e_matrix(p: Float[ArrayLike, "4"]) -> Float[Array, "3 4"]:
