@@ -109,7 +109,7 @@ def find_patches(
     cut = jnp.maximum(cut_right, cut_left)
     exists = (ranks >= 1) & (ranks <= count)
     score = jnp.where(exists, peak_depth - cut, 2.0 * _NO_PATCH)
-    _, slots = jax.lax.top_k(score, max_patches)
+    slots = _top_indices(score, max_patches)
     found = exists[slots]
     order = jnp.argsort(jnp.where(found, slots, slots + n + 1))  # lateral order, empty last
     slots, found = slots[order], found[order]
@@ -119,6 +119,19 @@ def find_patches(
     keep = jnp.where(shared, 1.0 - cut[slots] / jnp.where(shared, peak_depth[slots], 1.0), 1.0)
     weights = _strip_shares(depth, inside, rank, count, saddle, cut_left, cut_right, slots, found)
     return jnp.maximum(peak_index[slots], 0), found, keep, weights
+
+
+def _top_indices(score, k: int):
+    """Indices of the ``k`` largest entries of ``score``, largest first, the lower index
+    first among equal ones: ``lax.top_k``'s, by ``k`` arg-maxima (on the CPU ``top_k``
+    of a short row costs ten times as much)."""
+    positions = jnp.arange(score.shape[0])
+    chosen = []
+    for _ in range(k):
+        best = jnp.argmax(score)
+        chosen.append(best)
+        score = jnp.where(positions == best, -jnp.inf, score)
+    return jnp.stack(chosen)
 
 
 def _strip_shares(depth, inside, rank, count, saddle, cut_left, cut_right, slots, found):

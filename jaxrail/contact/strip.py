@@ -160,8 +160,11 @@ def strip_point(
     """
     height, slope, _ = surface.height_derivatives(y)
     radius = nominal_radius + height
-    s_w = strip_angle(slope, frame, side)
-    radial = -jnp.cos(s_w) * frame.up + jnp.sin(s_w) * frame.forward
+    # sin and cos of s_w (eq. 12, as in strip_angle) without trigonometric functions;
+    # s_w itself is computed only where a caller uses it.
+    sin_w = jnp.clip(side * slope * frame.sin_alpha / frame.cos_alpha, -0.999, 0.999)
+    s_w = jnp.arcsin(sin_w)
+    radial = -jnp.sqrt(1.0 - sin_w * sin_w) * frame.up + sin_w * frame.forward
     point = wheel_origin + side * y * frame.axle + radius * radial
     rel = point - rail_origin
     t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]

@@ -169,3 +169,15 @@ def test_narrow_patch_keeps_its_deepest_point():
     centres = np.array([float(overlap_centre(*(lambda d: (find_patches(d, 1)[3][0], d))(bump(0.3e-3, 50e-6, w)),
                                              Y, 0.3e-3)[0]) for w in widths])
     assert np.max(np.abs(np.diff(centres))) < 2e-6
+
+
+def test_top_indices_equals_lax_top_k():
+    """find_patches' arg-max ranking gives lax.top_k's indices, ties included."""
+    from jaxrail.contact.patches import _top_indices
+
+    rng = np.random.default_rng(3)
+    for row in (rng.normal(size=132), np.round(rng.normal(size=132), 1),
+                np.full(132, -2.0e3), np.r_[np.full(130, -2.0e3), 1.0, 1.0]):
+        row = jnp.asarray(row)
+        for k in (1, 3, 6):
+            np.testing.assert_array_equal(_top_indices(row, k), jax.lax.top_k(row, k)[1])
