@@ -122,7 +122,8 @@ def _simulate_command(args):
     duration = scenario.duration if args.duration is None else args.duration
     print(f"jaxrail simulate {scenario.name}: {scenario.description}", file=sys.stderr)
     print(f"compiling, then simulating {duration:g} s ...", file=sys.stderr)
-    result, vehicle, params, _ = run_scenario(scenario, duration, progress=not args.quiet)
+    result, vehicle, params, _ = run_scenario(scenario, duration, progress=not args.quiet,
+                                              contact=args.contact)
     summary = summarize(result, friction=float(params.contact.friction))
     summary["scenario"] = scenario.name
     print(f"{result.status}: {result.simulated_time_s:g} s simulated in "
@@ -184,7 +185,7 @@ def _identify_command(args):
           "(compiling the simulation and its gradient first) ...", file=sys.stderr)
     result = identify(scenario, measurements, names, initial=initial, bounds=bounds,
                       method=args.method, max_iterations=args.iterations,
-                      progress=not args.quiet, cutoff=args.cutoff)
+                      progress=not args.quiet, cutoff=args.cutoff, contact=args.contact)
     summary = result.as_dict()
     summary["scenario"] = scenario.name
     for name, entry in summary["parameters"].items():
@@ -234,7 +235,7 @@ def _montecarlo_command(args):
           "batched simulation first ...", file=sys.stderr)
     result = run_montecarlo(scenario, variations, args.samples, seed=args.seed,
                             design=args.design, duration=duration, chunk=args.chunk,
-                            progress=not args.quiet)
+                            progress=not args.quiet, contact=args.contact)
     table = result.table
     n = len(table["status"])
     print(f"{result.statuses} in {result.run_time_s:.1f} s (+ {result.compile_time_s:.1f} s "
@@ -270,6 +271,33 @@ def _montecarlo_command(args):
                     "max": float(good.max())}
     _emit_json(stats, args.summary)
     return 0 if np.all(ok) else 1
+
+
+def _contact_option(parser):
+    parser.add_argument("--contact", choices=("online", "table"),
+                        help="contact model: the paper's search at every evaluation (online) "
+                        "or its table, built once and cached (default: the scenario's "
+                        "[contact] mode)")
+
+
+def _tables_command(args):
+    from .contact.table_cache import contact_table, load_table, table_path
+    from .scenarios import load_scenario
+
+    scenario = load_scenario(args.scenario)
+    vehicle, _, _ = scenario.build()
+    where = (vehicle.wheel, vehicle.rail, vehicle.rail_offset, vehicle.config)
+    if args.action == "build":
+        _, info = contact_table(*where, progress=not args.quiet, cache=True)
+    else:
+        path = table_path(*where)
+        if not path.exists():
+            _emit_json({"scenario": scenario.name, "path": str(path), "cached": False}, None)
+            return 1
+        _, info = load_table(path)
+        info = {**info, "path": str(path), "cached": True}
+    _emit_json({"scenario": scenario.name, **info}, None)
+    return 0
 
 
 def build_parser():
@@ -313,6 +341,7 @@ def build_parser():
     simulate.add_argument("--summary", help="write the JSON summary here (default: stdout)")
     simulate.add_argument("--plots", help="write the figures (PNG) into this directory")
     simulate.add_argument("--quiet", action="store_true", help="no progress bar")
+    _contact_option(simulate)
     simulate.set_defaults(run=_simulate_command)
 
     ident = commands.add_parser(
@@ -335,6 +364,7 @@ def build_parser():
     ident.add_argument("--out", help="write the JSON result here (default: stdout)")
     ident.add_argument("--plot", help="write a PNG of the loss, parameters and channels")
     ident.add_argument("--quiet", action="store_true", help="no progress bar")
+    _contact_option(ident)
     ident.set_defaults(run=_identify_command)
 
     mc = commands.add_parser(
@@ -365,7 +395,17 @@ def build_parser():
     mc.add_argument("--num-processes", type=int, help="with --distributed")
     mc.add_argument("--process-id", type=int, help="with --distributed")
     mc.add_argument("--quiet", action="store_true", help="no progress bar")
+    _contact_option(mc)
     mc.set_defaults(run=_montecarlo_command)
+
+    tables = commands.add_parser(
+        "tables", help="build or describe the contact table of a scenario's profiles")
+    tables.add_argument("action", choices=("build", "info"),
+                        help="build: build and cache it (if not cached); info: where it is "
+                        "and how it was built")
+    tables.add_argument("scenario", help="a built-in scenario or a .toml file")
+    tables.add_argument("--quiet", action="store_true", help="no progress bar")
+    tables.set_defaults(run=_tables_command)
     return parser
 
 

@@ -29,3 +29,8 @@ from .search import deepest_depth as deepest_depth
 from .search import search_vehicle as search_vehicle
 from .search import search_wheel as search_wheel
 from .search import search_wheelset as search_wheelset
+from .table import ContactTable as ContactTable
+from .table import TableGrid as TableGrid
+from .table import build_contact_table as build_contact_table
+from .table import table_patches as table_patches
+from .table_cache import contact_table as contact_table

@@ -155,18 +155,36 @@ def _surface_deepest(surface, wheel, rail, geometry, config):
     return depth_fn(y_star), y_star
 
 
+def contact_geometry(surface, rail, nominal_radius, y_wheel, y_rail, dx, rail_origin,
+                     rail_axes, side):
+    """Geometry of one contact point from its profile coordinates: the wheel at
+    ``y_wheel`` [m] on ``surface``, the rail at ``y_rail`` [m], ``dx`` [m] along the
+    rail tangent from the rail section (``rail_origin`` (3,), ``rail_axes`` (3, 3),
+    global; ``side`` +1 left, -1 right). Returns a dict of the :class:`ContactPatches`
+    fields ``rail_point``, ``normal``, ``frame``, ``contact_angle``, ``rolling_radius``
+    and the curvatures but ``curvature_contact_y``."""
+    t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
+    f, f1, f2 = rail.height_derivatives(y_rail)
+    normal = (-side * f1 * n + b) / jnp.sqrt(1.0 + f1 * f1)
+    w, w1, w2 = surface.height_derivatives(y_wheel)
+    rolling_radius = nominal_radius + w
+    return dict(
+        rail_point=rail_origin + dx * t + side * y_rail * n + f * b,
+        normal=normal,
+        frame=jnp.stack([t, jnp.cross(normal, t), normal], axis=1),
+        contact_angle=jnp.arctan(f1),
+        rolling_radius=rolling_radius,
+        curvature_wheel_x=1.0 / (jnp.sqrt(1.0 + w1 * w1) * rolling_radius),
+        curvature_wheel_y=-w2 / (1.0 + w1 * w1) ** 1.5,
+        curvature_rail_y=-f2 / (1.0 + f1 * f1) ** 1.5,
+    )
+
+
 def _contact_data(surface, surface_index, wheel, rail, point, y, active, depth, curvature,
                   rail_origin, rail_axes, side):
     """Contact data of the patch with contact point at wheel coordinate ``y``, penetration
     ``depth`` [m] and relative lateral curvature ``curvature`` [1/m]."""
     p = point(y)
-    t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
-    f, f1, f2 = rail.height_derivatives(p.y_rail)
-    normal = (-side * f1 * n + b) / jnp.sqrt(1.0 + f1 * f1)
-    rail_point = rail_origin + p.dx * t + side * p.y_rail * n + f * b
-    lateral = jnp.cross(normal, t)
-    w, w1, w2 = surface.height_derivatives(y)
-    rolling_radius = wheel.nominal_radius + w
     active = active & (depth > 0.0)
     return dict(
         active=active,
@@ -177,15 +195,9 @@ def _contact_data(surface, surface_index, wheel, rail, point, y, active, depth, 
         dx=p.dx,
         y_rail=p.y_rail,
         wheel_point=p.wheel_point,
-        rail_point=rail_point,
-        normal=normal,
-        frame=jnp.stack([t, lateral, normal], axis=1),
-        contact_angle=jnp.arctan(f1),
-        rolling_radius=rolling_radius,
-        curvature_wheel_x=1.0 / (jnp.sqrt(1.0 + w1 * w1) * rolling_radius),
-        curvature_wheel_y=-w2 / (1.0 + w1 * w1) ** 1.5,
-        curvature_rail_y=-f2 / (1.0 + f1 * f1) ** 1.5,
         curvature_contact_y=curvature,
+        **contact_geometry(surface, rail, wheel.nominal_radius, y, p.y_rail, p.dx, rail_origin,
+                           rail_axes, side),
     )
 
 

@@ -141,7 +141,8 @@ def _residual_functions(vehicle, params, track, names, measurements, common):
     (the measured values are an argument, not part of the function)."""
     key = (id(vehicle), id(params), id(track), names, measurements.channels,
            measurements.time.tobytes(), measurements.noise.tobytes(),
-           tuple(sorted(common.items())))
+           tuple(sorted((k, v) for k, v in common.items() if k != "contact_model")),
+           common.get("contact_model") and common["contact_model"].name)
     if key not in _residual_cache:
         functions = tuple(simulation_residuals(vehicle, params, track, names, measurements,
                                                forward=forward, **common)
@@ -153,7 +154,7 @@ def _residual_functions(vehicle, params, track, names, measurements, common):
 
 def identify(scenario, measurements: Measurements, names, initial=None, bounds=None,
              method="lbfgs", max_iterations=30, tolerance=1e-9, progress=False,
-             built=None, cutoff=None) -> Identification:
+             built=None, cutoff=None, contact=None) -> Identification:
     """Fit the named parameters of ``scenario`` (:class:`jaxrail.scenarios.Scenario`)
     to ``measurements``.
 
@@ -162,7 +163,7 @@ def identify(scenario, measurements: Measurements, names, initial=None, bounds=N
     cutoff: the low-pass cutoff [Hz] the measured channels were filtered with (default
     ``CUTOFF_FRACTION`` times their sample rate; :func:`simulate_channels`);
     progress: show a tqdm bar with the loss; built: ``(vehicle, params, track)`` if
-    already built.
+    already built; contact: ``"online"`` or ``"table"`` (default the scenario's mode).
     """
     names = tuple(names)
     if not names or len(set(names)) != len(names):
@@ -179,7 +180,8 @@ def identify(scenario, measurements: Measurements, names, initial=None, bounds=N
     upper = np.array([limits[n][1] for n in names])
     options = scenario.solver_options()
     common = dict(speed=scenario.speed, misalignment=scenario.misalignment,
-                  duration=scenario.duration, options=options, cutoff=cutoff)
+                  duration=scenario.duration, options=options, cutoff=cutoff,
+                  contact_model=scenario.contact_model(vehicle, contact, progress))
     residuals, forward = _residual_functions(vehicle, params, track, names, measurements,
                                              common)
     bar = None

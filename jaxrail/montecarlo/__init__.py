@@ -51,12 +51,12 @@ class MonteCarlo:
 
 
 def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=None,
-                progress=False, keep_results=False, built=None) -> MonteCarlo:
+                progress=False, keep_results=False, built=None, contact=None) -> MonteCarlo:
     """Run ``scenario`` once per sample: ``samples`` {input: array (N,)} with inputs
     ``speed`` [m/s], ``misalignment`` [m] and parameter names (others keep the
     scenario's values). ``duration`` [s] overrides the scenario's; ``devices``: the
     devices to shard over (default all); ``built``: the scenario's ``build()`` output,
-    to reuse."""
+    to reuse; ``contact``: ``"online"`` or ``"table"`` (default the scenario's mode)."""
     import jax
 
     check_names(samples, PARAMETERS)
@@ -85,7 +85,8 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
         if keep_results:
             kept.append(result)
 
-    compile_s, run_s, chunk = run_chunks((vehicle, track, params), (values, speed, shift),
+    model = scenario.contact_model(vehicle, contact, progress)
+    compile_s, run_s, chunk = run_chunks((vehicle, track, params, model), (values, speed, shift),
                                          chunk, devices, progress=progress, on_chunk=collect,
                                          names=names, duration=duration, options=options)
     table = {"sample": np.arange(n), "speed": speed.copy(), "misalignment": shift.copy()}

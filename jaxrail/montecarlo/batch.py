@@ -37,31 +37,36 @@ from ..simulate import DerailmentLimits, SolverOptions, _compile, solve
 AXIS = "batch"
 
 
-def batched_solve(vehicle, track, params, values, speed, misalignment, *, names, duration,
-                  options: SolverOptions, limits: DerailmentLimits = DerailmentLimits()):
+def batched_solve(vehicle, track, params, contact, values, speed, misalignment, *, names,
+                  duration, options: SolverOptions,
+                  limits: DerailmentLimits = DerailmentLimits()):
     """:func:`jaxrail.simulate.solve` of every sample: ``values`` (B, len(names)) of the
     named parameters, ``speed`` (B,) [m/s], ``misalignment`` (B,) [m]; everything else
-    shared. Returns a SimulationResult with a leading batch axis B."""
+    shared, ``contact`` the contact model (:mod:`jaxrail.vehicles.loads`). Returns a
+    SimulationResult with a leading batch axis B."""
     def one(v, s, m):
         p = set_values(vehicle, params, names, v) if names else params
-        return solve(vehicle, track, p, duration, s, m, options=options, limits=limits)
+        return solve(vehicle, track, p, duration, s, m, options=options, limits=limits,
+                     contact_model=contact)
 
     return jax.vmap(one)(values, speed, misalignment)
 
 
-def _sharded_solve(vehicle, track, params, values, speed, misalignment, *, devices,
+def _sharded_solve(vehicle, track, params, contact, values, speed, misalignment, *, devices,
                    **static):
     """:func:`batched_solve` with the batch split over ``devices`` (a tuple): each
     device runs its rows alone (``jax.shard_map``), the model replicated."""
     if len(devices) == 1:
-        return batched_solve(vehicle, track, params, values, speed, misalignment, **static)
-    model, fixed = eqx.partition((vehicle, track, params), eqx.is_array)
+        return batched_solve(vehicle, track, params, contact, values, speed, misalignment,
+                             **static)
+    model, fixed = eqx.partition((vehicle, track, params, contact), eqx.is_array)
     mesh = jax.sharding.Mesh(np.array(devices), (AXIS,))
     rows = PartitionSpec(AXIS)
 
     def local(model, values, speed, misalignment):
-        vehicle, track, params = eqx.combine(model, fixed)
-        return batched_solve(vehicle, track, params, values, speed, misalignment, **static)
+        vehicle, track, params, contact = eqx.combine(model, fixed)
+        return batched_solve(vehicle, track, params, contact, values, speed, misalignment,
+                             **static)
 
     return jax.shard_map(local, mesh=mesh, in_specs=(PartitionSpec(), rows, rows, rows),
                          out_specs=rows, check_vma=False)(model, values, speed, misalignment)
@@ -102,7 +107,8 @@ def chunk_size(requested, n_samples, n_devices):
 
 
 def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None, **static):
-    """Run :func:`batched_solve` on ``model`` = (vehicle, track, params) and ``inputs`` =
+    """Run :func:`batched_solve` on ``model`` = (vehicle, track, params, contact model) and
+    ``inputs`` =
     (values, speed, misalignment) host arrays with a common leading axis N, in chunks
     of ``chunk`` rows (the last one padded), sharded over ``devices`` (default: all);
     ``static``: names, duration, options, limits. ``on_chunk(start, stop, result)``

@@ -19,7 +19,7 @@ import equinox as eqx
 from ..profiles.named import named_profile
 from ..simulate import SolverOptions, simulate
 from ..track import Arc, Straight, Track, Transition
-from ..vehicles import bogie, single_wheelset, trailer
+from ..vehicles import CONTACT_MODELS, bogie, contact_model, single_wheelset, trailer
 from ..vehicles.trailer import trailer_values
 
 BUILTIN = ("paper-curve", "paper-curve-simplified", "straight", "bogie-curve-entry")
@@ -50,6 +50,7 @@ class Scenario:
     output_rate: float
     source: str
     fixed_step: float | None = None
+    contact: str = "online"
 
     def solver_options(self, duration=None, progress=False) -> SolverOptions:
         """SolverOptions with ``output_rate`` samples per second over the duration."""
@@ -60,6 +61,11 @@ class Scenario:
             return options
         steps = int(math.ceil(duration / self.fixed_step - 1e-9))
         return dataclasses.replace(options, fixed_step=self.fixed_step, max_steps=steps + 1)
+
+    def contact_model(self, vehicle, contact=None, progress=False):
+        """The contact model of this scenario (``contact`` overrides its ``[contact]
+        mode``): the paper's search, or its table built or loaded for ``vehicle``."""
+        return contact_model(self.contact if contact is None else contact, vehicle, progress)
 
     def track(self) -> Track:
         return Track.from_segments([_SEGMENTS[s["kind"]][0](**{k: v for k, v in s.items()
@@ -152,7 +158,11 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
         output_rate=float(solver.get("output_rate", 50.0)),
         source=where,
         fixed_step=None if "fixed_step" not in solver else float(solver["fixed_step"]),
+        contact=raw.get("contact", {}).get("mode", "online"),
     )
+    if scenario.contact not in CONTACT_MODELS:
+        raise ValueError(f"{where}: [contact] mode must be one of {CONTACT_MODELS}, got "
+                         f"{scenario.contact!r}")
     if scenario.fixed_step is not None and not scenario.fixed_step > 0.0:
         raise ValueError(f"{where}: fixed_step must be > 0, got {scenario.fixed_step}")
     for key in ("speed", "duration", "rtol", "atol", "output_rate", "friction"):
@@ -174,10 +184,12 @@ def load_scenario(name_or_path) -> Scenario:
     return parse_scenario(path.read_text(), str(path))
 
 
-def run_scenario(scenario: Scenario, duration=None, progress=False):
-    """Build and simulate a scenario: ``(result, vehicle, params, track)``."""
+def run_scenario(scenario: Scenario, duration=None, progress=False, contact=None):
+    """Build and simulate a scenario: ``(result, vehicle, params, track)``. ``contact``:
+    ``"online"`` or ``"table"``, overriding the scenario's ``[contact] mode``."""
     vehicle, params, track = scenario.build()
+    model = scenario.contact_model(vehicle, contact, progress)
     duration = scenario.duration if duration is None else float(duration)
     result = simulate(vehicle, track, params, duration, scenario.speed, scenario.misalignment,
-                      options=scenario.solver_options(duration, progress))
+                      options=scenario.solver_options(duration, progress), contact_model=model)
     return result, vehicle, params, track

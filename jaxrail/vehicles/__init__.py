@@ -13,7 +13,10 @@ from .trailer import trailer as trailer
 from .trailer import trailer_values as trailer_values
 from .vehicle import Vehicle as Vehicle
 from .vehicle import VehicleParams as VehicleParams
+from .loads import CONTACT_MODELS as CONTACT_MODELS
 from .loads import OnlineContact as OnlineContact
+from .loads import TableContact as TableContact
+from .loads import contact_model as contact_model
 from .loads import VehicleLoads as VehicleLoads
 from .loads import contact_loads as contact_loads
 from .loads import vehicle_accelerations as vehicle_accelerations

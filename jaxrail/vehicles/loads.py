@@ -7,7 +7,9 @@ written once:
 
 1. the wheelsets' poses and velocities from the state ``(q, qdot)``;
 2. the contact patches of each wheelset from a **contact model**
-   (:class:`OnlineContact`: the paper's search at every evaluation, the reference);
+   (:class:`OnlineContact`: the paper's search at every evaluation, the reference;
+   :class:`TableContact`: the same search tabulated over the wheel's pose relative to
+   its rail, :mod:`jaxrail.contact.table`);
 3. per patch Hertz, the normal law and Polach (:func:`jaxrail.vehicles.wheel_rail.patch_loads`);
 4. the resultant force and moment on each wheelset, as loads on the bodies ``(n, 3)``
    for eq. (19) (:func:`jaxrail.multibody.accelerations`).
@@ -22,6 +24,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..contact.search import search_wheelset
+from ..contact.table import ContactTable, table_patches
+from ..contact.table_cache import contact_table
 from ..multibody import accelerations
 from .vehicle import Vehicle, VehicleParams, wheelset_states
 from .wheel_rail import ContactParameters, patch_loads
@@ -38,6 +42,41 @@ class OnlineContact(eqx.Module):
         body axes ``rotation`` (3, 3), global."""
         return search_wheelset(vehicle.wheel, vehicle.rail, track, vehicle.rail_offset,
                                position, rotation, vehicle.config)
+
+
+class TableContact(eqx.Module):
+    """Contact patches interpolated from a :class:`~jaxrail.contact.table.ContactTable`
+    of the vehicle's wheel and rail profiles (:func:`contact_model` builds or loads it).
+
+    The table is data: it is traced, so a new table of the same grid does not
+    recompile."""
+
+    table: ContactTable
+    name = "table"
+
+    def wheelset_patches(self, vehicle: Vehicle, track, position, rotation):
+        """Contact patches ``(2, P)`` of the wheelset at ``position`` (3,) [m] with body
+        axes ``rotation`` (3, 3), global, from the table."""
+        sides = jnp.array([1.0, -1.0])
+        return jax.vmap(lambda side: table_patches(
+            self.table, vehicle.wheel, vehicle.rail, track, vehicle.rail_offset, position,
+            rotation, side))(sides)
+
+
+CONTACT_MODELS = ("online", "table")
+
+
+def contact_model(name: str, vehicle: Vehicle, progress: bool = False):
+    """The contact model called ``name`` (:data:`CONTACT_MODELS`) for ``vehicle``: the
+    paper's search, or its table (from the cache, or built and cached with a progress
+    bar when ``progress``)."""
+    if name == "online":
+        return OnlineContact()
+    if name == "table":
+        table, _ = contact_table(vehicle.wheel, vehicle.rail, vehicle.rail_offset,
+                                 vehicle.config, progress=progress)
+        return TableContact(table)
+    raise ValueError(f"contact model must be one of {CONTACT_MODELS}, got {name!r}")
 
 
 def _model(model):
