@@ -293,6 +293,8 @@ def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: f
     numbers. Returns a :class:`SimulationResult` with wall and compile times [s].
     """
     start = time.perf_counter()
+    # the default model spelt out, so that None and OnlineContact() share one program
+    contact_model = OnlineContact() if contact_model is None else contact_model
     t1, speed, misalignment = (jnp.float64(x) for x in (t1, speed, misalignment))
     s0 = None if s0 is None else jnp.float64(s0)
     compile_time = 0.0
