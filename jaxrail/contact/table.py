@@ -400,11 +400,14 @@ def _axes(grid: TableGrid):
 
 def _spline_matrix(count):
     """(count + 2, count + 2) system for the coefficients of a uniform quadratic
-    B-spline through ``count`` node values, with a zero second difference of the
-    coefficients at both ends (rows 0 and -1)."""
+    B-spline through ``count`` node values, with a zero third difference of the
+    coefficients at both ends (rows 0 and -1), so that quadratics are reproduced
+    exactly up to the ends (a yaw axis of five nodes is mostly ends); two nodes give
+    the line through them."""
     a = np.zeros((count + 2, count + 2))
-    a[0, :3] = (1.0, -2.0, 1.0)
-    a[-1, -3:] = (1.0, -2.0, 1.0)
+    end = (-1.0, 3.0, -3.0, 1.0) if count > 2 else (1.0, -2.0, 1.0)  # two nodes: a line
+    a[0, :len(end)] = end
+    a[-1, -len(end):] = end
     for i in range(count):
         a[i + 1, i:i + 3] = (0.125, 0.75, 0.125)
     return a
