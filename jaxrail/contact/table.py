@@ -19,8 +19,11 @@ offset and wheel angle (eqs. 12-13), and the Hertz curvature of the patch. Patch
 tracked along the lateral axis at build time, so that a slot holds the same patch from
 node to node and interpolation never mixes two patches.
 
-Lookups interpolate every field with a quadratic B-spline through the nodes (C1 in
-every axis, one block of 3 x 3 x 3 x 3 coefficients per lookup), and derive
+Lookups interpolate every field with a quadratic B-spline through the nodes along
+lateral, yaw and roll (C1, one block of 3 x 3 x 3 coefficients at every approach
+level), then along the levels in the wheel's vertical position: each patch's depth by
+cubic Hermite interpolation from its depth and slope at the two levels around it, the
+other fields by Catmull-Rom interpolation across the levels. They derive
 the rest of :class:`jaxrail.contact.ContactPatches` (contact frame, angle, rolling
 radius, profile curvatures) from the profiles at the interpolated points, as the
 search does.
@@ -93,10 +96,10 @@ class ContactTable(eqx.Module):
 
     Fields:
         values: (2, lateral, yaw, roll, approach, slots + 1, len(FIELDS)) float64,
-            sides (left, right): quadratic B-spline coefficients of the fields of
-            :data:`FIELDS` per patch slot (two more than the nodes along every axis of
-            two or more nodes), and in the last slot the deepest depth's offset and
-            slope (the first two fields).
+            sides (left, right): quadratic B-spline coefficients along lateral, yaw and
+            roll (two more than the nodes along every axis of two or more nodes) of
+            the fields of :data:`FIELDS` per patch slot at each approach level, and in
+            the last slot the wheel's vertical position at that level (first field).
         grid: the :class:`TableGrid`.
         surfaces: wheel surface index of each slot (static).
         radius: nominal wheel radius [m] that places the taping point.
@@ -145,10 +148,10 @@ def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, le
     """The search at one node (lateral [m], yaw [rad], roll [rad]) of the ``side`` rail
     with the wheel lowered until its deepest patch penetrates each of the ``levels`` [m].
 
-    Returns ``(found (L, P), values (L, P, len(FIELDS)), depth (L, P), deepest (L, 2),
-    miss)``: the slots holding a patch, their fields, their signed depths, the deepest
-    depth's offset and slope at each level (as the first two fields), and the largest
-    error [m] of the deepest depth against its level."""
+    Returns ``(found (L, P), values (L, P, len(FIELDS)), depth (L, P), heights (L,),
+    miss)``: the slots holding a patch, their fields, their signed depths, the wheel's
+    vertical position [m] at each level, and the largest error [m] of the deepest depth
+    against its level."""
     track = straight_track(100.0)
     first_strip = jnp.stack([config.strip_grid(surface)[0] for surface in wheel.surfaces])
 
@@ -199,10 +202,7 @@ def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, le
     heights = jnp.stack(heights)
     found, values = jax.vmap(level)(heights)
     depth = values[..., 0] - values[..., 1] * heights[:, None]
-    deepest, d_deepest = jax.vmap(lambda z: jax.jvp(lambda v: residual(v, 0.0), (z,),
-                                                    (jnp.ones_like(z),)))(heights)
-    deepest_model = jnp.stack([deepest - d_deepest * heights, -d_deepest], axis=-1)
-    return found, values, depth, deepest_model, jnp.max(jnp.abs(jnp.stack(misses)))
+    return found, values, depth, heights, jnp.max(jnp.abs(jnp.stack(misses)))
 
 
 @eqx.filter_jit
@@ -382,11 +382,11 @@ def build_contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchC
         found = np.concatenate(found).reshape(shape + (len(surfaces),))
         values = np.concatenate(values).reshape(shape + (len(surfaces), len(FIELDS)))
         depth = np.concatenate(depth).reshape(shape + (len(surfaces),))
-        deepest = np.concatenate(deepest).reshape(shape + (1, 2))
+        deepest = np.concatenate(deepest).reshape(shape)
         tracked = _assign_slots(found, values, depth, surfaces)
-        # the deepest depth's linear model as one more slot: it sets the approach
+        # the wheel's vertical position at each level as one more slot (first field)
         extra = np.zeros(shape + (1, len(FIELDS)))
-        extra[..., :2] = deepest
+        extra[..., 0, 0] = deepest
         tracked = np.concatenate([tracked, extra], axis=-2)
         sides.append(tracked)
     diagnostics = {"nodes": total, "level_misses": misses, "worst_level_miss_m": worst_miss}
@@ -414,10 +414,12 @@ def _spline_matrix(count):
 
 
 def _prefilter(values, grid: TableGrid):
-    """Quadratic B-spline coefficients (2, lateral + 2, yaw + 2, roll + 2, approach + 2,
-    P, F) of ``values`` (2, lateral, yaw, roll, approach, P, F): the spline through every
-    node value (C1, third-order accurate); one-node axes stay as they are."""
-    for dim, axis in enumerate(_axes(grid), start=1):
+    """Quadratic B-spline coefficients (2, lateral + 2, yaw + 2, roll + 2, approach, P, F)
+    of ``values`` (2, lateral, yaw, roll, approach, P, F) along the pose axes: the spline
+    through every node value (C1, third-order accurate); one-node axes stay as they
+    are. The approach axis keeps its node values (:func:`table_patches` interpolates
+    along it in the wheel's vertical position)."""
+    for dim, axis in enumerate(_axes(grid)[:3], start=1):
         if axis.count < 2:
             continue
         moved = np.moveaxis(values, dim, 0)
@@ -440,32 +442,57 @@ def _spline_weights(axis: Axis, x):
     return i.astype(jnp.int32), w
 
 
-def interpolate(table: ContactTable, side_index, lateral, yaw, roll, approach=None,
-                fields=None):
-    """Fields (slots, len(FIELDS)) at a pose from the quadratic B-spline of the table (C1
-    in every axis): one block of 3 coefficients per axis, contracted axis by axis. With
-    ``approach=None`` at the middle node of the approach axis, else at the deepest
-    patch's depth ``approach`` [m]; ``fields``: a slice of the fields to read (default
-    all)."""
+def interpolate(table: ContactTable, side_index, lateral, yaw, roll):
+    """Fields (approach nodes, slots + 1, len(FIELDS)) at a pose from the quadratic
+    B-spline of the table along lateral, yaw and roll (C1): one block of 3 coefficients
+    per axis, contracted axis by axis, at every approach node."""
     grid = table.grid
-    fields = slice(0, len(FIELDS)) if fields is None else fields
-    if approach is None:
-        approach = grid.approach.nodes[grid.approach.count // 2]
-    else:  # the axis is the square root of the depth (clamped below its first node)
-        approach = jnp.sqrt(jnp.maximum(approach, grid.approach.start ** 2))
     starts, weights = [], []
-    for axis, x in zip(_axes(grid), (lateral, yaw, roll, approach)):
+    for axis, x in zip(_axes(grid)[:3], (lateral, yaw, roll)):
         start, w = _spline_weights(axis, x)
         starts.append(start)
         weights.append(w)
-    slots = table.values.shape[-2]
-    index = [jnp.asarray(i, dtype=jnp.int32) for i in (side_index, *starts, 0, fields.start)]
+    index = [jnp.asarray(i, dtype=jnp.int32) for i in (side_index, *starts, 0, 0, 0)]
     block = jax.lax.dynamic_slice(
-        table.values, index,
-        (1, *(len(w) for w in weights), slots, fields.stop - fields.start))[0]
+        table.values, index, (1, *(len(w) for w in weights), *table.values.shape[-3:]))[0]
     for w in weights:
         block = jnp.sum(w.reshape((len(w),) + (1,) * (block.ndim - 1)) * block, axis=0)
     return block
+
+
+def _along_levels(heights, fields, vertical, levels):
+    """Per slot the depth [m] and the other fields at the wheel's ``vertical`` position
+    [m] from their values at the approach levels (``heights`` (L,) decreasing, the wheel
+    lower at deeper levels; ``fields`` (L, P, F)): the depth by cubic Hermite
+    interpolation in the vertical position between the two levels around it, from each
+    level's depth and slope (C1; beyond the first and last level, that level's line),
+    the other fields by Catmull-Rom interpolation in the level index."""
+    count = heights.shape[0]
+    below = jnp.sum(heights > vertical)  # levels above the wheel's position
+    i = jnp.clip(below - 1, 0, count - 2)
+    z0, z1 = heights[i], heights[i + 1]
+    t = jnp.clip((z0 - vertical) / (z0 - z1), 0.0, 1.0)
+    f0, f1 = fields[i], fields[i + 1]
+    # No patch is deeper than the level's deepest depth, and none deepens faster than
+    # the wheel comes down (guards against nodes where the search's refined depth jumps)
+    s0, s1 = jnp.clip(f0[:, 1], 0.0, 1.0), jnp.clip(f1[:, 1], 0.0, 1.0)
+    d0 = jnp.minimum(f0[:, 0] - f0[:, 1] * z0, levels[i])
+    d1 = jnp.minimum(f1[:, 0] - f1[:, 1] * z1, levels[i + 1])
+    span = z0 - z1  # the wheel comes down by this from level i to i + 1
+    h00, h10 = 2 * t ** 3 - 3 * t ** 2 + 1, t ** 3 - 2 * t ** 2 + t
+    h01, h11 = -2 * t ** 3 + 3 * t ** 2, t ** 3 - t ** 2
+    hermite = h00 * d0 + h10 * span * s0 + h01 * d1 + h11 * span * s1
+    first = jnp.minimum(fields[0, :, 0] - fields[0, :, 1] * heights[0], levels[0]) \
+        + jnp.clip(fields[0, :, 1], 0.0, 1.0) * (heights[0] - vertical)
+    last = jnp.minimum(fields[-1, :, 0] - fields[-1, :, 1] * heights[-1], levels[-1]) \
+        + jnp.clip(fields[-1, :, 1], 0.0, 1.0) * (heights[-1] - vertical)
+    depth = jnp.where(vertical > heights[0], first,
+                      jnp.where(vertical < heights[-1], last, hermite))
+    # the other fields: Catmull-Rom in the level index (C1 in t, third order)
+    index = jnp.clip(i + jnp.arange(-1, 3), 0, count - 1)
+    w = 0.5 * jnp.stack([-t ** 3 + 2 * t ** 2 - t, 3 * t ** 3 - 5 * t ** 2 + 2,
+                         -3 * t ** 3 + 4 * t ** 2 + t, t ** 3 - t ** 2])
+    return depth, jnp.tensordot(w, fields[index], axes=1)
 
 
 def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset_position,
@@ -478,17 +505,11 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
     lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, _ = relative_pose(
         track, rail_offset, table.radius, wheelset_position, wheelset_rotation, side)
     side_index = jnp.where(side > 0.0, 0, 1).astype(jnp.int32)
-    # The approach (the deepest depth) from its linear model at the middle level, once
-    # more at that approach, then every field there.
     slots = len(table.surfaces)
-    model = interpolate(table, side_index, lateral, yaw, roll, fields=slice(0, 2))[slots]
-    approach = model[0] - model[1] * vertical
-    model = interpolate(table, side_index, lateral, yaw, roll, approach, slice(0, 2))[slots]
-    approach = model[0] - model[1] * vertical
-    fields = interpolate(table, side_index, lateral, yaw, roll, approach)[:slots]
-    offset, slope, y_wheel, y_rail, s_wheel, dx, curvature = (
-        fields[:, k] for k in range(len(FIELDS)))
-    depth = offset - slope * vertical
+    levels = interpolate(table, side_index, lateral, yaw, roll)
+    depth, fields = _along_levels(levels[:, slots, 0], levels[:, :slots], vertical,
+                                  jnp.asarray(table.grid.levels))
+    _, _, y_wheel, y_rail, s_wheel, dx, curvature = (fields[:, k] for k in range(len(FIELDS)))
     active = depth > 0.0
     penetration = jnp.where(active, depth, 0.0)
     surfaces = np.asarray(table.surfaces)
