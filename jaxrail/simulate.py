@@ -26,7 +26,7 @@ import numpy as np
 from .multibody import constraints, simulate_system
 from .track import to_track_coordinates, track_frame
 from .vehicles.initial import initial_state
-from .vehicles.loads import OnlineContact, VehicleLoads, contact_loads
+from .vehicles.loads import VehicleLoads, contact_loads, resolve_contact_model
 from .vehicles.vehicle import Vehicle, VehicleParams, wheelset_states
 
 
@@ -216,8 +216,7 @@ def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignmen
     instead of the static equilibrium (:func:`jaxrail.vehicles.initial_state`); wheel
     lifts and vertical displacements are measured from the initial state.
     ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's search)."""
-    model = OnlineContact() if contact_model is None else contact_model
-    loads = VehicleLoads(vehicle, params.contact, track, model)
+    loads = VehicleLoads(vehicle, params.contact, track, resolve_contact_model(contact_model))
     if initial is None:
         q0, qdot0 = initial_state(vehicle, params, track, speed, misalignment, s0,
                                   loads.model)
@@ -294,7 +293,7 @@ def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: f
     """
     start = time.perf_counter()
     # the default model spelt out, so that None and OnlineContact() share one program
-    contact_model = OnlineContact() if contact_model is None else contact_model
+    contact_model = resolve_contact_model(contact_model)
     t1, speed, misalignment = (jnp.float64(x) for x in (t1, speed, misalignment))
     s0 = None if s0 is None else jnp.float64(s0)
     compile_time = 0.0

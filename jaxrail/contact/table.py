@@ -11,11 +11,11 @@ axis, eq. 7). The pose is
 
 A :class:`ContactTable` holds, for each rail (left, right) and each node of a grid in
 (lateral, yaw, roll), what the paper's search (:func:`jaxrail.contact.search_wheel`)
-finds with the wheel lowered until its deepest patch penetrates ``reference_depth``:
-per patch slot the signed depth and its derivative in ``vertical`` (so that the
-penetration at any other vertical position is linear in it: the rigid-table
-assumption), the contact point on the wheel and rail profiles, its longitudinal
-offset and wheel angle (eqs. 12-13), and the Hertz curvature of the patch. Patches are
+finds with the wheel lowered until its deepest patch penetrates each depth of the
+approach axis: the wheel's vertical position there and, per patch slot, the signed
+depth and its derivative in ``vertical``, the contact point on the wheel and rail
+profiles, its longitudinal offset and wheel angle (eqs. 12-13), and the Hertz
+curvature of the patch. Patches are
 tracked along the lateral axis at build time, so that a slot holds the same patch from
 node to node and interpolation never mixes two patches.
 
@@ -114,9 +114,9 @@ class ContactTable(eqx.Module):
 def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotation, side):
     """Pose of one wheel relative to its rail (module docstring).
 
-    Returns ``(lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, sin_alpha)``:
-    the four pose coordinates [m, m, rad, rad], the rail section's arc length [m], origin
-    (3,) and axes (3, 3), and the sine of the axle's yaw to the rail tangent (eq. 12)."""
+    Returns ``(lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes)``: the four
+    pose coordinates [m, m, rad, rad] and the rail section's arc length [m], origin (3,)
+    and axes (3, 3)."""
     axle = wheelset_rotation[:, 1]
     wheel_origin = wheelset_position + side * HALF_TAPING_DISTANCE * axle
     s_rail = project(track, wheel_origin)
@@ -127,7 +127,7 @@ def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotati
     roll = jnp.arcsin(jnp.clip(local[2], -1.0, 1.0))
     yaw = jnp.arctan2(-local[0], local[1])
     return (taping @ rail_axes[:, 1], taping @ rail_axes[:, 2], yaw, roll, s_rail, rail_origin,
-            rail_axes, frame.sin_alpha)
+            rail_axes)
 
 
 def _pose_on_straight(track, rail_offset, radius, lateral, vertical, yaw, roll, side):
@@ -238,9 +238,10 @@ def _track_line(found, values, depth, surfaces):
             surface = surfaces[k]
             best, distance = None, _TRACK_JUMP
             for t, (s, last, last_i) in enumerate(tracks):
-                if s == surface and last_i == i - 1 and t not in used \
-                        and _distance(last, values[i, k]) < distance:
-                    best, distance = t, _distance(last, values[i, k])
+                if s == surface and last_i == i - 1 and t not in used:
+                    gap = _distance(last, values[i, k])
+                    if gap < distance:
+                        best, distance = t, gap
             if best is None:
                 newcomers.append(k)
                 continue
@@ -362,16 +363,16 @@ def build_contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchC
     sides = []
     levels = grid.levels
     for side in (1.0, -1.0):
-        found, values, depth, deepest = [], [], [], []
+        found, values, depth, heights = [], [], [], []
         for start in range(0, len(nodes), chunk):
             batch = nodes[start:start + chunk]
             padded = np.concatenate([batch, np.repeat(batch[-1:], chunk - len(batch), 0)])
-            f, v, d, deep, miss = _run_nodes(wheel, rail, float(rail_offset), jnp.asarray(padded),
-                                       jnp.asarray(side), config, radius, levels)
+            f, v, d, z, miss = _run_nodes(wheel, rail, float(rail_offset), jnp.asarray(padded),
+                                          jnp.asarray(side), config, radius, levels)
             found.append(np.asarray(f)[:len(batch)])
             values.append(np.asarray(v)[:len(batch)])
             depth.append(np.asarray(d)[:len(batch)])
-            deepest.append(np.asarray(deep)[:len(batch)])
+            heights.append(np.asarray(z)[:len(batch)])
             miss = np.asarray(miss)[:len(batch)]
             worst_miss = max(worst_miss, float(np.max(miss)))
             misses += int(np.sum(miss > _LEVEL_TOLERANCE))
@@ -382,11 +383,11 @@ def build_contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchC
         found = np.concatenate(found).reshape(shape + (len(surfaces),))
         values = np.concatenate(values).reshape(shape + (len(surfaces), len(FIELDS)))
         depth = np.concatenate(depth).reshape(shape + (len(surfaces),))
-        deepest = np.concatenate(deepest).reshape(shape)
+        heights = np.concatenate(heights).reshape(shape)
         tracked = _assign_slots(found, values, depth, surfaces)
         # the wheel's vertical position at each level as one more slot (first field)
         extra = np.zeros(shape + (1, len(FIELDS)))
-        extra[..., 0, 0] = deepest
+        extra[..., 0, 0] = heights
         tracked = np.concatenate([tracked, extra], axis=-2)
         sides.append(tracked)
     diagnostics = {"nodes": total, "level_misses": misses, "worst_level_miss_m": worst_miss}
@@ -394,8 +395,8 @@ def build_contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchC
                         radius), diagnostics
 
 
-def _axes(grid: TableGrid):
-    return (grid.lateral, grid.yaw, grid.roll, grid.approach)
+def _pose_axes(grid: TableGrid):
+    return (grid.lateral, grid.yaw, grid.roll)
 
 
 def _spline_matrix(count):
@@ -419,7 +420,7 @@ def _prefilter(values, grid: TableGrid):
     through every node value (C1, third-order accurate); one-node axes stay as they
     are. The approach axis keeps its node values (:func:`table_patches` interpolates
     along it in the wheel's vertical position)."""
-    for dim, axis in enumerate(_axes(grid)[:3], start=1):
+    for dim, axis in enumerate(_pose_axes(grid), start=1):
         if axis.count < 2:
             continue
         moved = np.moveaxis(values, dim, 0)
@@ -448,7 +449,7 @@ def interpolate(table: ContactTable, side_index, lateral, yaw, roll):
     per axis, contracted axis by axis, at every approach node."""
     grid = table.grid
     starts, weights = [], []
-    for axis, x in zip(_axes(grid)[:3], (lateral, yaw, roll)):
+    for axis, x in zip(_pose_axes(grid), (lateral, yaw, roll)):
         start, w = _spline_weights(axis, x)
         starts.append(start)
         weights.append(w)
@@ -472,20 +473,18 @@ def _along_levels(heights, fields, vertical, levels):
     i = jnp.clip(below - 1, 0, count - 2)
     z0, z1 = heights[i], heights[i + 1]
     t = jnp.clip((z0 - vertical) / (z0 - z1), 0.0, 1.0)
-    f0, f1 = fields[i], fields[i + 1]
     # No patch is deeper than the level's deepest depth, and none deepens faster than
     # the wheel comes down (guards against nodes where the search's refined depth jumps)
-    s0, s1 = jnp.clip(f0[:, 1], 0.0, 1.0), jnp.clip(f1[:, 1], 0.0, 1.0)
-    d0 = jnp.minimum(f0[:, 0] - f0[:, 1] * z0, levels[i])
-    d1 = jnp.minimum(f1[:, 0] - f1[:, 1] * z1, levels[i + 1])
+    slope = jnp.clip(fields[:, :, 1], 0.0, 1.0)
+    at_level = jnp.minimum(fields[:, :, 0] - fields[:, :, 1] * heights[:, None],
+                           levels[:, None])
     span = z0 - z1  # the wheel comes down by this from level i to i + 1
     h00, h10 = 2 * t ** 3 - 3 * t ** 2 + 1, t ** 3 - 2 * t ** 2 + t
     h01, h11 = -2 * t ** 3 + 3 * t ** 2, t ** 3 - t ** 2
-    hermite = h00 * d0 + h10 * span * s0 + h01 * d1 + h11 * span * s1
-    first = jnp.minimum(fields[0, :, 0] - fields[0, :, 1] * heights[0], levels[0]) \
-        + jnp.clip(fields[0, :, 1], 0.0, 1.0) * (heights[0] - vertical)
-    last = jnp.minimum(fields[-1, :, 0] - fields[-1, :, 1] * heights[-1], levels[-1]) \
-        + jnp.clip(fields[-1, :, 1], 0.0, 1.0) * (heights[-1] - vertical)
+    hermite = (h00 * at_level[i] + h10 * span * slope[i] + h01 * at_level[i + 1]
+               + h11 * span * slope[i + 1])
+    first = at_level[0] + slope[0] * (heights[0] - vertical)
+    last = at_level[-1] + slope[-1] * (heights[-1] - vertical)
     depth = jnp.where(vertical > heights[0], first,
                       jnp.where(vertical < heights[-1], last, hermite))
     # the other fields: Catmull-Rom in the level index (C1 in t, third order)
@@ -499,10 +498,10 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
                   wheelset_rotation, side) -> ContactPatches:
     """Contact patches of one wheel from ``table`` instead of the search: the same
     :class:`ContactPatches` as :func:`jaxrail.contact.search_wheel` (leading shape
-    ``(P,)``), with the penetration linear in the wheel's vertical position at each
-    interpolated patch (the rigid-table assumption)."""
+    ``(P,)``), each patch's penetration interpolated between the approach levels in the
+    wheel's vertical position (:func:`_along_levels`)."""
     side = jnp.asarray(side, dtype=jnp.float64)
-    lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, _ = relative_pose(
+    lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes = relative_pose(
         track, rail_offset, table.radius, wheelset_position, wheelset_rotation, side)
     side_index = jnp.where(side > 0.0, 0, 1).astype(jnp.int32)
     slots = len(table.surfaces)

@@ -79,7 +79,8 @@ def contact_model(name: str, vehicle: Vehicle, progress: bool = False):
     raise ValueError(f"contact model must be one of {CONTACT_MODELS}, got {name!r}")
 
 
-def _model(model):
+def resolve_contact_model(model):
+    """``model``, or :class:`OnlineContact` (the paper's search) for ``None``."""
     return OnlineContact() if model is None else model
 
 
@@ -88,7 +89,8 @@ def wheelset_loads(vehicle: Vehicle, contact: ContactParameters, track, position
     """Wheel-rail force (3,) [N] and moment (3,) [N m] about the centre of one wheelset,
     global, with its patches and patch forces: ``(force, moment, patches, forces)``.
     ``model``: the contact model (default :class:`OnlineContact`)."""
-    patches = _model(model).wheelset_patches(vehicle, track, position, rotation)
+    patches = resolve_contact_model(model).wheelset_patches(vehicle, track, position,
+                                                             rotation)
     force, moment, forces = patch_loads(contact, patches, position, velocity, angular_velocity)
     return force, moment, patches, forces
 
@@ -133,5 +135,5 @@ def vehicle_accelerations(vehicle: Vehicle, params: VehicleParams, track, t, q, 
                           model=None):
     """``qddot`` (7 n,) of eq. (19) with gravity, the suspension and the wheel-rail
     loads of ``model`` (default :class:`OnlineContact`)."""
-    loads = VehicleLoads(vehicle, params.contact, track, _model(model))
+    loads = VehicleLoads(vehicle, params.contact, track, resolve_contact_model(model))
     return accelerations(vehicle.system, params.system, t, q, qdot, loads)[0]
