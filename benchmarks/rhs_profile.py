@@ -1,9 +1,12 @@
 """Where the time of one right-hand-side evaluation goes, per contact model.
 
 For each contact model (``online``, the paper's search, and ``table``, its table, built
-and cached first if needed, with the build time reported) the median of ``--calls``
-jitted calls, after compilation, at the initial state of a scenario (default
-``paper-curve``, the trailer):
+and cached first if needed, with the build time reported) the median cost of one
+evaluation at the initial state of a scenario (default ``paper-curve``, the trailer),
+with the parameters traced, measured as the integrator runs it: inside a compiled loop
+of 50 evaluations, median of ``--calls`` loops (``single_call_us``: the median of ten
+times as many jitted calls from Python, which add the dispatch and run the program
+outside a loop; several times slower for these small programs):
 
 - ``contact_us``: the contact patches of all wheels (the search, or the table lookup);
 - ``loads_us``: the patches and the force laws (:func:`jaxrail.vehicles.contact_loads`);
@@ -11,12 +14,13 @@ jitted calls, after compilation, at the initial state of a scenario (default
 - ``multibody_us``: eq. (19) without wheel-rail loads (mass matrix, constraints,
   force elements, the solve);
 - ``rhs_median_us``: the whole right-hand side (:func:`jaxrail.vehicles.vehicle_accelerations`);
+  ``xla_defaults_us``: the same compiled with XLA's default options instead;
 - ``compile_s``: the compile time of each of these programs.
 
 With ``--batch N`` also the whole right-hand side vmapped over N states (the initial
 one with the whole vehicle shifted along the global y axis by 0-4 mm), per member.
 Prints one JSON object with an object per model and ``online_over_table``.
-Usage: ``python benchmarks/rhs_profile.py [--calls 200] [--scenario S] [--batch N]``.
+Usage: ``python benchmarks/rhs_profile.py [--calls 40] [--scenario S] [--batch N]``.
 """
 
 import argparse
@@ -29,6 +33,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrail import enable_float64
+from jaxrail._compiler import compiler_options
 
 enable_float64()
 
@@ -40,60 +45,95 @@ from jaxrail.vehicles import (OnlineContact, TableContact, contact_loads,  # noq
 from jaxrail.vehicles.vehicle import wheelset_states  # noqa: E402
 
 
-def timed(function, args, calls):
-    """(median run time [us], compile time [s]) of ``jax.jit(function)(*args)``."""
-    start = time.perf_counter()
-    compiled = jax.jit(function).lower(*args).compile()
-    compile_s = time.perf_counter() - start
+LOOP_REPEATS = 50
+
+
+def _median_call_s(compiled, args, calls):
     jax.block_until_ready(compiled(*args))
     times = []
     for _ in range(calls):
         start = time.perf_counter()
         jax.block_until_ready(compiled(*args))
         times.append(time.perf_counter() - start)
-    return 1e6 * statistics.median(times), compile_s
+    return statistics.median(times)
+
+
+def timed(function, args, calls):
+    """(median run time [us], compile time [s]) of ``jax.jit(function)(*args)``."""
+    start = time.perf_counter()
+    compiled = jax.jit(function).lower(*args).compile(compiler_options())
+    compile_s = time.perf_counter() - start
+    return 1e6 * _median_call_s(compiled, args, calls), compile_s
+
+
+def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
+    """Median run time [us] of one evaluation of ``function(q, qdot, params)`` inside a
+    compiled loop of ``repeats`` evaluations, as the integrator runs it (median of
+    ``calls`` runs of the loop), compiled with jaxrail's compiler options
+    (:mod:`jaxrail._compiler`) or ``options``.
+
+    Each evaluation sees the state moved by a tiny multiple of the previous outputs,
+    so that nothing is hoisted out of the loop.
+    """
+
+    def loop(q, qdot, params):
+        def body(_, carry):
+            nudge = 1e-15 * carry
+            out = function(q + nudge, qdot + nudge, params)
+            return carry + sum(jnp.sum(leaf) for leaf in jax.tree_util.tree_leaves(out))
+        return jax.lax.fori_loop(0, repeats, body, jnp.zeros(()))
+
+    options = compiler_options() if options is None else options
+    compiled = jax.jit(loop).lower(*args).compile(options)
+    return 1e6 * _median_call_s(compiled, args, calls) / repeats
 
 
 def profile_model(model, vehicle, params, track, q, qdot, calls, batch):
     """The JSON object of one contact model."""
 
-    def contact(q, qdot):
+    def contact(q, qdot, params):
         position, rotation, _, _ = wheelset_states(vehicle, q, qdot)
         return jax.vmap(lambda r, a: model.wheelset_patches(vehicle, track, r, a))(
-            position, rotation).penetration
+            position, rotation)
 
-    def loads(q, qdot):
+    def loads(q, qdot, params):
         return contact_loads(vehicle, params.contact, track, q, qdot, model)[:2]
 
-    def multibody(q, qdot):
+    def multibody(q, qdot, params):
         return accelerations(vehicle.system, params.system, 0.0, q, qdot)[0]
 
-    def rhs(q, qdot):
+    def rhs(q, qdot, params):
         return vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model)
 
-    parts = {name: timed(f, (q, qdot), calls) for name, f in
+    args = (q, qdot, params)
+    parts = {name: timed(f, args, 10 * calls) for name, f in
              (("contact", contact), ("loads", loads), ("multibody", multibody), ("rhs", rhs))}
+    looped = {name: timed_in_loop(f, args, calls) for name, f in
+              (("contact", contact), ("loads", loads), ("multibody", multibody), ("rhs", rhs))}
     out = {
-        "rhs_median_us": round(parts["rhs"][0], 1),
-        "contact_us": round(parts["contact"][0], 1),
-        "force_laws_us": round(parts["loads"][0] - parts["contact"][0], 1),
-        "loads_us": round(parts["loads"][0], 1),
-        "multibody_us": round(parts["multibody"][0], 1),
+        "rhs_median_us": round(looped["rhs"], 1),
+        "contact_us": round(looped["contact"], 1),
+        "force_laws_us": round(looped["loads"] - looped["contact"], 1),
+        "loads_us": round(looped["loads"], 1),
+        "multibody_us": round(looped["multibody"], 1),
+        "xla_defaults_us": round(timed_in_loop(rhs, args, calls, options={}), 1),
+        "single_call_us": {name: round(value[0], 1) for name, value in parts.items()},
         "compile_s": {name: round(value[1], 2) for name, value in parts.items()},
     }
     if batch:
         shifts = jnp.linspace(0.0, 4e-3, batch)
         q_batch = jax.vmap(lambda d: q.reshape(-1, 7).at[:, 1].add(d).reshape(-1))(shifts)
         qdot_batch = jnp.broadcast_to(qdot, (batch,) + qdot.shape)
-        member = timed(jax.vmap(rhs), (q_batch, qdot_batch), calls)[0] / batch
+        batched = jax.vmap(rhs, in_axes=(0, 0, None))
+        member = timed_in_loop(batched, (q_batch, qdot_batch, params), calls) / batch
         out.update(batch=batch, rhs_per_member_us=round(member, 1),
-                   one_over_member=round(parts["rhs"][0] / member, 3))
+                   one_over_member=round(looped["rhs"] / member, 3))
     return out
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--calls", type=int, default=200)
+    parser.add_argument("--calls", type=int, default=40)
     parser.add_argument("--scenario", default="paper-curve")
     parser.add_argument("--batch", type=int, default=0, help="members of a vmapped batch")
     args = parser.parse_args()

@@ -23,6 +23,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._compiler import compile_lowered
 from .multibody import constraints, simulate_system
 from .track import to_track_coordinates, track_frame
 from .vehicles.initial import initial_state
@@ -266,14 +267,15 @@ _compiled = {}
 
 def _compile(function, *args, **kwargs):
     """AOT-compile ``function`` for these arguments once per static structure and
-    argument shapes; returns (compiled, compile time [s], 0 if it was cached)."""
+    argument shapes, with jaxrail's compiler options (:mod:`jaxrail._compiler`);
+    returns (compiled, compile time [s], 0 if it was cached)."""
     leaves, structure = jax.tree.flatten((args, kwargs))
     key = (id(function), structure, tuple((x.shape, x.dtype) if eqx.is_array(x) else x
                                       for x in leaves))
     if key in _compiled:
         return _compiled[key], 0.0
     start = time.perf_counter()
-    _compiled[key] = function.lower(*args, **kwargs).compile()
+    _compiled[key] = compile_lowered(function.lower(*args, **kwargs))
     return _compiled[key], time.perf_counter() - start
 
 

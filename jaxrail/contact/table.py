@@ -445,20 +445,22 @@ def _spline_weights(axis: Axis, x):
 
 def interpolate(table: ContactTable, side_index, lateral, yaw, roll):
     """Fields (approach nodes, slots + 1, len(FIELDS)) at a pose from the quadratic
-    B-spline of the table along lateral, yaw and roll (C1): one block of 3 coefficients
-    per axis, contracted axis by axis, at every approach node."""
-    grid = table.grid
-    starts, weights = [], []
-    for axis, x in zip(_pose_axes(grid), (lateral, yaw, roll)):
+    B-spline of the table along lateral, yaw and roll (C1): the 3 x 3 x 3 block of
+    coefficients around the pose, taken as rows of the table seen as (nodes, rest) in
+    one gather (several times cheaper than a 7-D slice), weighted by the product of
+    the axes' weights."""
+    values = table.values
+    shape = values.shape
+    rows = values.reshape(shape[0] * shape[1] * shape[2] * shape[3], -1)
+    index = jnp.asarray(side_index, dtype=jnp.int32)
+    weight = jnp.ones(())
+    for axis, x, count in zip(_pose_axes(table.grid), (lateral, yaw, roll), shape[1:4]):
         start, w = _spline_weights(axis, x)
-        starts.append(start)
-        weights.append(w)
-    index = [jnp.asarray(i, dtype=jnp.int32) for i in (side_index, *starts, 0, 0, 0)]
-    block = jax.lax.dynamic_slice(
-        table.values, index, (1, *(len(w) for w in weights), *table.values.shape[-3:]))[0]
-    for w in weights:
-        block = jnp.sum(w.reshape((len(w),) + (1,) * (block.ndim - 1)) * block, axis=0)
-    return block
+        offsets = jnp.arange(len(w), dtype=jnp.int32)
+        index = (index * count)[..., None] + start + offsets
+        weight = weight[..., None] * w
+    block = rows[index.reshape(-1)]
+    return (weight.reshape(-1) @ block).reshape(shape[4:])
 
 
 def _along_levels(heights, fields, vertical, levels):

@@ -31,6 +31,8 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from .._compiler import compiler_options
+
 
 @dataclasses.dataclass(frozen=True)
 class FitResult:
@@ -158,8 +160,10 @@ def _compiled(residuals, method, learning_rate, forward_residuals=None):
         to_values = _transform(*bounds)[0]
         return loss_gradient_jacobian(lambda z: forward_residuals(to_values(z), data), z)
 
-    _COMPILED[key] = (optimizer, jax.jit(reverse if forward_residuals is None else forward),
-                      jax.jit(residuals_z),
+    options = compiler_options()
+    _COMPILED[key] = (optimizer, jax.jit(reverse if forward_residuals is None else forward,
+                                         compiler_options=options),
+                      jax.jit(residuals_z, compiler_options=options),
                       jax.jit(lambda grad, state, z: optimizer.update(grad, state, z)))
     return _COMPILED[key]
 

@@ -1,0 +1,34 @@
+"""XLA compiler options for jaxrail's compiled programs.
+
+A right-hand side of the trailer is a few hundred small operations (tens of elements
+each), run hundreds of thousands of times inside the integrator's loop. On the CPU,
+XLA's default scheduler orders them for concurrent execution on its thread pool,
+which for operations this small costs more in hand-over than it gains; the
+memory-optimised scheduler runs them in order. The loop-emitter fusions (instead of
+the newer fusion emitters) are cheaper for these small shapes too. Together they make
+the trailer's right-hand side 1.2-1.3 times cheaper in a compiled loop
+(``benchmarks/rhs_profile.py``, ``xla_defaults_us``), with the same arithmetic.
+
+Options go to each compilation (``jax.jit(..., compiler_options=...)`` or
+``Lowered.compile``), never to the process-wide ``XLA_FLAGS``: importing jaxrail
+changes nothing for other code in the process.
+"""
+
+import jax
+
+_CPU_OPTIONS = {
+    "xla_cpu_scheduler_type": "CPU_SCHEDULER_TYPE_MEMORY_OPTIMIZED",
+    "xla_cpu_use_fusion_emitters": False,
+}
+
+
+def compiler_options(backend: str | None = None) -> dict:
+    """The options for a program compiled for ``backend`` (default JAX's default
+    backend): the CPU ones above, none elsewhere."""
+    backend = jax.default_backend() if backend is None else backend
+    return dict(_CPU_OPTIONS) if backend == "cpu" else {}
+
+
+def compile_lowered(lowered):
+    """``lowered.compile()`` with :func:`compiler_options`."""
+    return lowered.compile(compiler_options())
