@@ -29,6 +29,7 @@ import os
 import statistics
 import time
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 
@@ -67,7 +68,7 @@ def timed(function, args, calls):
 
 
 def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
-    """Median run time [us] of one evaluation of ``function(q, qdot, params)`` inside a
+    """Median run time [us] of one evaluation of ``function(q, qdot, data)`` inside a
     compiled loop of ``repeats`` evaluations, as the integrator runs it (median of
     ``calls`` runs of the loop), compiled with jaxrail's compiler options
     (:mod:`jaxrail._compiler`) or ``options``.
@@ -76,10 +77,10 @@ def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
     so that nothing is hoisted out of the loop.
     """
 
-    def loop(q, qdot, params):
+    def loop(q, qdot, data):
         def body(_, carry):
             nudge = 1e-15 * carry
-            out = function(q + nudge, qdot + nudge, params)
+            out = function(q + nudge, qdot + nudge, data)
             return carry + sum(jnp.sum(leaf) for leaf in jax.tree_util.tree_leaves(out))
         return jax.lax.fori_loop(0, repeats, body, jnp.zeros(()))
 
@@ -89,23 +90,33 @@ def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
 
 
 def profile_model(model, vehicle, params, track, q, qdot, calls, batch):
-    """The JSON object of one contact model."""
+    """The JSON object of one contact model. Everything but the structure is traced,
+    as in :func:`jaxrail.simulate.simulate` (the profiles, the track, the parameters
+    and the contact table are arguments of the compiled program, not constants)."""
+    data, structure = eqx.partition((vehicle, track, params, model), eqx.is_array)
 
-    def contact(q, qdot, params):
+    def parts_of(function):
+        return lambda q, qdot, data: function(q, qdot, *eqx.combine(data, structure))
+
+    @parts_of
+    def contact(q, qdot, vehicle, track, params, model):
         position, rotation, _, _ = wheelset_states(vehicle, q, qdot)
         return jax.vmap(lambda r, a: model.wheelset_patches(vehicle, track, r, a))(
             position, rotation)
 
-    def loads(q, qdot, params):
+    @parts_of
+    def loads(q, qdot, vehicle, track, params, model):
         return contact_loads(vehicle, params.contact, track, q, qdot, model)[:2]
 
-    def multibody(q, qdot, params):
+    @parts_of
+    def multibody(q, qdot, vehicle, track, params, model):
         return accelerations(vehicle.system, params.system, 0.0, q, qdot)[0]
 
-    def rhs(q, qdot, params):
+    @parts_of
+    def rhs(q, qdot, vehicle, track, params, model):
         return vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model)
 
-    args = (q, qdot, params)
+    args = (q, qdot, data)
     parts = {name: timed(f, args, 10 * calls) for name, f in
              (("contact", contact), ("loads", loads), ("multibody", multibody), ("rhs", rhs))}
     looped = {name: timed_in_loop(f, args, calls) for name, f in
@@ -125,7 +136,7 @@ def profile_model(model, vehicle, params, track, q, qdot, calls, batch):
         q_batch = jax.vmap(lambda d: q.reshape(-1, 7).at[:, 1].add(d).reshape(-1))(shifts)
         qdot_batch = jnp.broadcast_to(qdot, (batch,) + qdot.shape)
         batched = jax.vmap(rhs, in_axes=(0, 0, None))
-        member = timed_in_loop(batched, (q_batch, qdot_batch, params), calls) / batch
+        member = timed_in_loop(batched, (q_batch, qdot_batch, data), calls) / batch
         out.update(batch=batch, rhs_per_member_us=round(member, 1),
                    one_over_member=round(looped["rhs"] / member, 3))
     return out

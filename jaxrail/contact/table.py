@@ -94,21 +94,38 @@ class TableGrid(eqx.Module):
 class ContactTable(eqx.Module):
     """Tabulated contact of one wheel profile on its rail, both sides.
 
+    Built from ``values`` (2, lateral, yaw, roll, approach, slots + 1, len(FIELDS))
+    float64, sides (left, right): quadratic B-spline coefficients along lateral, yaw
+    and roll (two more than the nodes along every axis of two or more nodes) of the
+    fields of :data:`FIELDS` per patch slot at each approach level, and in the last slot
+    the wheel's vertical position at that level (first field). Kept as ``rows``, one
+    row per (side, lateral, yaw, roll) node, so that a lookup gathers whole rows from
+    the array as it is (a reshape of a traced table inside the integrator's loop made
+    XLA:CPU's loop emitters slow); ``values`` gives them back in their shape.
+
     Fields:
-        values: (2, lateral, yaw, roll, approach, slots + 1, len(FIELDS)) float64,
-            sides (left, right): quadratic B-spline coefficients along lateral, yaw and
-            roll (two more than the nodes along every axis of two or more nodes) of
-            the fields of :data:`FIELDS` per patch slot at each approach level, and in
-            the last slot the wheel's vertical position at that level (first field).
+        rows: (2 lateral yaw roll, approach (slots + 1) len(FIELDS)) float64.
+        shape: the shape of ``values`` (static).
         grid: the :class:`TableGrid`.
         surfaces: wheel surface index of each slot (static).
         radius: nominal wheel radius [m] that places the taping point.
     """
 
-    values: jax.Array
+    rows: jax.Array
+    shape: tuple[int, ...] = eqx.field(static=True)
     grid: TableGrid = eqx.field(static=True)
     surfaces: tuple[int, ...] = eqx.field(static=True)
     radius: float = eqx.field(static=True)
+
+    def __init__(self, values, grid: TableGrid, surfaces, radius):
+        self.shape = tuple(int(n) for n in values.shape)
+        self.rows = jnp.asarray(values).reshape(math.prod(self.shape[:4]), -1)
+        self.grid, self.surfaces, self.radius = grid, tuple(surfaces), float(radius)
+
+    @property
+    def values(self) -> jax.Array:
+        """The coefficients in their shape (see the class docstring)."""
+        return self.rows.reshape(self.shape)
 
 
 def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotation, side):
@@ -446,12 +463,9 @@ def _spline_weights(axis: Axis, x):
 def interpolate(table: ContactTable, side_index, lateral, yaw, roll):
     """Fields (approach nodes, slots + 1, len(FIELDS)) at a pose from the quadratic
     B-spline of the table along lateral, yaw and roll (C1): the 3 x 3 x 3 block of
-    coefficients around the pose, taken as rows of the table seen as (nodes, rest) in
-    one gather (several times cheaper than a 7-D slice), weighted by the product of
-    the axes' weights."""
-    values = table.values
-    shape = values.shape
-    rows = values.reshape(shape[0] * shape[1] * shape[2] * shape[3], -1)
+    coefficients around the pose, 27 of the table's ``rows`` in one gather (several
+    times cheaper than a 7-D slice), weighted by the product of the axes' weights."""
+    shape = table.shape
     index = jnp.asarray(side_index, dtype=jnp.int32)
     weight = jnp.ones(())
     for axis, x, count in zip(_pose_axes(table.grid), (lateral, yaw, roll), shape[1:4]):
@@ -459,7 +473,7 @@ def interpolate(table: ContactTable, side_index, lateral, yaw, roll):
         offsets = jnp.arange(len(w), dtype=jnp.int32)
         index = (index * count)[..., None] + start + offsets
         weight = weight[..., None] * w
-    block = rows[index.reshape(-1)]
+    block = table.rows[index.reshape(-1)]
     return (weight.reshape(-1) @ block).reshape(shape[4:])
 
 
