@@ -47,6 +47,10 @@ _CLEAR = 1.0e-3  # [m] slots that never hold a patch: this far clear of the rail
 # [m] per node: a slot's depth where its patch has gone falls off this fast from the last
 # node that held it (a ramp, not a step: the spline through the nodes would ring)
 _RAMP = 3.0e-5
+# [m] per node: along the lateral axis a gone patch's depth continues its own trend
+# (no kink for the spline to ring at), falling by at least this and its last depth,
+# at most _RAMP
+_RAMP_MIN = 1.0e-6
 _CANDIDATE = 1.5e-4  # [m] a found slot deeper than -this is a patch (search: 1e-4)
 _TRACK_JUMP = 1.0e-2  # [m] largest move of a patch on the wheel between lateral nodes
 _LEVEL_TOLERANCE = 1.0e-7  # [m] on the deepest depth at each approach level (reported)
@@ -241,16 +245,17 @@ def _track_line(found, values, depth, surfaces):
     """Slot-consistent values (L, P, F) and owned flags (L, P) of one lateral line:
     patches tracked along the lateral axis by their wheel coordinate, each surface's
     slots assigned in order of birth; empty slots continue the nearest value of their
-    track, falling off by ``_RAMP`` per node."""
+    track, falling off as :func:`_fall` says."""
     n, p, _ = values.shape
     out = np.zeros_like(values)
     owner = np.full((n, p), -1)  # track id per node and slot
+    held = np.full((n, p), -np.inf)  # depth of the patch in each slot and node
     tracks = []  # (surface, last values, last node) per track id
     slot_of = {}
     for i in range(n):
         used = set()
         newcomers = []
-        held = np.full(p, -np.inf)  # depth of the patch in each slot at this node
+        held_here = held[i]  # depth of the patch in each slot at this node
         for k in sorted(np.flatnonzero(found[i]), key=lambda k: -depth[i, k]):
             surface = surfaces[k]
             best, distance = None, _TRACK_JUMP
@@ -266,7 +271,7 @@ def _track_line(found, values, depth, surfaces):
             tracks[best] = (surface, values[i, k], i)
             owner[i, slot_of[best]] = best
             out[i, slot_of[best]] = values[i, k]
-            held[slot_of[best]] = depth[i, k]
+            held_here[slot_of[best]] = depth[i, k]
         for k in newcomers:  # deepest first
             surface = surfaces[k]
             free = [j for j in range(p) if surfaces[j] == surface
@@ -274,15 +279,15 @@ def _track_line(found, values, depth, surfaces):
             if not free:
                 # more patches than slots: the shallowest patch gives up its slot
                 mine = [j for j in range(p) if surfaces[j] == surface and owner[i, j] >= 0]
-                j = min(mine, key=lambda j: held[j]) if mine else None
-                if j is None or held[j] >= depth[i, k]:
+                j = min(mine, key=lambda j: held_here[j]) if mine else None
+                if j is None or held_here[j] >= depth[i, k]:
                     continue
                 free = [j]
             tracks.append((surface, values[i, k], i))
             slot_of[len(tracks) - 1] = free[0]
             owner[i, free[0]] = len(tracks) - 1
             out[i, free[0]] = values[i, k]
-            held[free[0]] = depth[i, k]
+            held_here[free[0]] = depth[i, k]
     clear = np.zeros(len(FIELDS))
     clear[0] = -_CLEAR
     for j in range(p):
@@ -293,8 +298,22 @@ def _track_line(found, values, depth, surfaces):
         for i in np.flatnonzero(owner[:, j] < 0):
             near = have[np.argmin(np.abs(have - i))]
             out[i, j] = out[near, j]
-            out[i, j, 0] -= min(_CLEAR, _RAMP * abs(i - near))
+            out[i, j, 0] -= min(_CLEAR, _fall(out[:, j, 0], owner[:, j], held[:, j], near, i)
+                                * abs(i - near))
     return out, owner >= 0
+
+
+def _fall(offset, owner, held, near, i):
+    """How fast [m per node] a slot's depth offset falls from ``near``, the last node
+    whose patch it held, toward ``i``: the patch's own trend over the node before
+    ``near`` when the same patch was there (a continued line has no kink for the
+    spline to ring at), at least its depth at ``near`` and ``_RAMP_MIN``, at most
+    ``_RAMP``."""
+    inner = near - 1 if i > near else near + 1
+    trend = 0.0
+    if 0 <= inner < len(offset) and owner[inner] == owner[near]:
+        trend = offset[inner] - offset[near]
+    return float(np.clip(max(trend, held[near]), _RAMP_MIN, _RAMP))
 
 
 def _match(found, values, depth, reference, owned, surfaces, rigid):
