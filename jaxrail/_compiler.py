@@ -24,11 +24,10 @@ _CPU_OPTIONS = {
 }
 
 
-def compiler_options(backend: str | None = None) -> dict:
-    """The options for a program compiled for ``backend`` (default JAX's default
-    backend): the CPU ones above, none elsewhere."""
-    backend = jax.default_backend() if backend is None else backend
-    return dict(_CPU_OPTIONS) if backend == "cpu" else {}
+def compiler_options() -> dict:
+    """The options for a program compiled for JAX's default backend: the CPU ones
+    above, none elsewhere."""
+    return dict(_CPU_OPTIONS) if jax.default_backend() == "cpu" else {}
 
 
 def compile_lowered(lowered):

@@ -255,7 +255,6 @@ def _track_line(found, values, depth, surfaces):
     for i in range(n):
         used = set()
         newcomers = []
-        held_here = held[i]  # depth of the patch in each slot at this node
         for k in sorted(np.flatnonzero(found[i]), key=lambda k: -depth[i, k]):
             surface = surfaces[k]
             best, distance = None, _TRACK_JUMP
@@ -271,7 +270,7 @@ def _track_line(found, values, depth, surfaces):
             tracks[best] = (surface, values[i, k], i)
             owner[i, slot_of[best]] = best
             out[i, slot_of[best]] = values[i, k]
-            held_here[slot_of[best]] = depth[i, k]
+            held[i, slot_of[best]] = depth[i, k]
         for k in newcomers:  # deepest first
             surface = surfaces[k]
             free = [j for j in range(p) if surfaces[j] == surface
@@ -279,15 +278,15 @@ def _track_line(found, values, depth, surfaces):
             if not free:
                 # more patches than slots: the shallowest patch gives up its slot
                 mine = [j for j in range(p) if surfaces[j] == surface and owner[i, j] >= 0]
-                j = min(mine, key=lambda j: held_here[j]) if mine else None
-                if j is None or held_here[j] >= depth[i, k]:
+                j = min(mine, key=lambda j: held[i, j]) if mine else None
+                if j is None or held[i, j] >= depth[i, k]:
                     continue
                 free = [j]
             tracks.append((surface, values[i, k], i))
             slot_of[len(tracks) - 1] = free[0]
             owner[i, free[0]] = len(tracks) - 1
             out[i, free[0]] = values[i, k]
-            held_here[free[0]] = depth[i, k]
+            held[i, free[0]] = depth[i, k]
     clear = np.zeros(len(FIELDS))
     clear[0] = -_CLEAR
     for j in range(p):
