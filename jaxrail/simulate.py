@@ -10,8 +10,9 @@ wheelset moves sideways or a wheel rises beyond the limits of
 :class:`DerailmentLimits`) or the integration fails (non-finite state, step size
 collapse, too many steps).
 
-Solver: Tsit5 with a PID step-size controller by default (the measurement that chose
-it is in docs/simulation.md).
+Solver: Tsit5 with a PID step-size controller by default, or the IMEX method of
+:mod:`jaxrail.multibody.imex` (``SolverOptions(integrator="imex")``); the measurements that
+chose them are in docs/simulation.md.
 """
 
 import dataclasses
@@ -25,6 +26,7 @@ import numpy as np
 
 from ._compiler import compile_lowered
 from .multibody import constraints, simulate_system
+from .multibody.imex import IMEX
 from .track import to_track_coordinates, track_frame
 from .vehicles.initial import initial_state
 from .vehicles.loads import VehicleLoads, contact_loads, resolve_contact_model
@@ -45,6 +47,9 @@ class DerailmentLimits(eqx.Module):
     lift: jax.Array = eqx.field(converter=_f64, default=0.025)
 
 
+INTEGRATORS = ("tsit5", "imex")
+
+
 @dataclasses.dataclass(frozen=True)
 class SolverOptions:
     """Integration settings (static: changing them recompiles).
@@ -61,6 +66,10 @@ class SolverOptions:
     pcoeff and icoeff are unused): the outputs are then smooth functions of the
     parameters, which gradients checked by finite differences and fits need
     (docs/identification.md).
+    integrator: one of :data:`INTEGRATORS`: "tsit5" (explicit, held to
+    steps of about 0.3 ms by the stiff creep) or "imex" (the creep and the normal
+    contact stiffness implicit, :class:`jaxrail.multibody.imex.IMEX`, KenCarp5;
+    steps of about 1 ms; docs/simulation.md).
     """
 
     rtol: float = 1e-4
@@ -72,10 +81,18 @@ class SolverOptions:
     pcoeff: float = 0.4
     icoeff: float = 0.3
     fixed_step: float | None = None
+    integrator: str = "tsit5"
 
     def __post_init__(self):
         if self.fixed_step is not None and not self.fixed_step > 0.0:
             raise ValueError(f"fixed_step must be > 0 [s], got {self.fixed_step}")
+        if self.integrator not in INTEGRATORS:
+            raise ValueError(f"integrator must be one of {INTEGRATORS}, got "
+                             f"{self.integrator!r}")
+
+    def solver(self):
+        """The diffrax solver of ``integrator``."""
+        return IMEX() if self.integrator == "imex" else diffrax.Tsit5()
 
     def controller(self):
         """diffrax step-size controller and first step [s]."""
@@ -229,7 +246,8 @@ def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignmen
     controller, dt0 = options.controller()
     sol = simulate_system(
         vehicle.system, params.system, q0, qdot0, t1, dt0=dt0,
-        saveat=diffrax.SaveAt(ts=ts), rtol=options.rtol, atol=options.atol, solver=solver,
+        saveat=diffrax.SaveAt(ts=ts), rtol=options.rtol, atol=options.atol,
+        solver=options.solver() if solver is None else solver,
         external=loads, max_steps=options.max_steps, adjoint=adjoint, throw=False,
         stepsize_controller=controller,
         event=_derailment_event(vehicle, track, limits, rest_heights), progress_meter=meter)
@@ -286,7 +304,7 @@ def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: f
     """Run a vehicle along a track for ``t1`` [s] at ``speed`` [m/s] from static
     equilibrium, shifted ``misalignment`` [m] to the left (or from ``initial`` =
     ``(q0, qdot0)``); see the module docstring. ``solver``: a diffrax solver (default
-    Tsit5). ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's
+    ``options.solver()``). ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's
     search, :class:`~jaxrail.vehicles.OnlineContact`).
 
     The two compiled programs (initial equilibrium, integration) are cached: a second

@@ -30,6 +30,7 @@ from .joints import Revolute as Revolute
 from .joints import Spherical as Spherical
 from .system import System as System
 from .system import SystemParams as SystemParams
+from .system import acceleration_response as acceleration_response
 from .system import accelerations as accelerations
 from .system import accelerations_dense as accelerations_dense
 from .system import angular_momentum as angular_momentum

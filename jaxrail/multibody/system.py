@@ -355,6 +355,34 @@ def _lean_solve(params, q, rhs_top, rhs_bottom, phi_q):
     return qddot, jnp.concatenate([lam_n, lam_j])
 
 
+def acceleration_response(system: System, params: SystemParams, q, qdot, bodies, blocks):
+    """d qddot / d x for body-local loads: ``blocks`` (k, 7, m) is the derivative of
+    the generalized load (7,) on each body of ``bodies`` (k static indices) with
+    respect to m quantities of its own (e.g. its q and qdot, m = 14); returns the
+    accelerations (7 n, k, m) they cause, the joint reactions included.
+
+    With q, qdot fixed eq. (19) is affine in the loads g; its linear part is
+    `_lean_solve`'s W - (Phi_j W)^T S^-1 (Phi_j W), applied here body by body."""
+    n, k = system.n_bodies, len(bodies)
+    index = np.asarray(bodies, dtype=int)
+    _, phi_q, _, _ = constraints(system, params, q, qdot)
+    w = _inverse_mass(params, q.reshape(n, 7)[:, 3:])
+    columns = jnp.moveaxis(blocks, 2, 0)  # (m, k, 7)
+    own = _apply_w(tuple(x[index] for x in w), columns)  # (m, k, 7)
+    free = jnp.zeros((n, 7, k, blocks.shape[2]), dtype=q.dtype)
+    free = free.at[index, :, np.arange(k), :].set(jnp.moveaxis(own, 0, 2))
+    free = free.reshape(7 * n, k, -1)
+    phi_j = phi_q[n:]
+    nj = phi_j.shape[0]
+    if nj == 0:
+        return free
+    x = _apply_w(w, phi_j.reshape(nj, n, 7))  # Phi_j W (nj, n, 7)
+    factor = jax.scipy.linalg.cho_factor(x.reshape(nj, -1) @ phi_j.T)
+    load_rows = jnp.einsum("rkc,kcm->rkm", x[:, index, :], blocks)
+    lam = jax.scipy.linalg.cho_solve(factor, load_rows.reshape(nj, -1))
+    return free - (x.reshape(nj, -1).T @ lam).reshape(free.shape)
+
+
 def _augmented_solve(mass, phi_q, rhs_top, rhs_bottom):
     """(qddot, lambda) of eq. (19) by one dense LU solve of the augmented matrix (the
     reference for `_lean_solve`)."""

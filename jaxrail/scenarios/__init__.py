@@ -17,7 +17,7 @@ from pathlib import Path
 import equinox as eqx
 
 from ..profiles.named import named_profile
-from ..simulate import SolverOptions, simulate
+from ..simulate import INTEGRATORS, SolverOptions, simulate
 from ..track import Arc, Straight, Track, Transition
 from ..vehicles import CONTACT_MODELS, bogie, contact_model, single_wheelset, trailer
 from ..vehicles.trailer import trailer_values
@@ -51,12 +51,14 @@ class Scenario:
     source: str
     fixed_step: float | None = None
     contact: str = "online"
+    integrator: str = "tsit5"
 
     def solver_options(self, duration=None, progress=False) -> SolverOptions:
         """SolverOptions with ``output_rate`` samples per second over the duration."""
         duration = self.duration if duration is None else duration
         options = SolverOptions(rtol=self.rtol, atol=self.atol, progress=progress,
-                                n_outputs=max(2, int(round(duration * self.output_rate)) + 1))
+                                n_outputs=max(2, int(round(duration * self.output_rate)) + 1),
+                                integrator=self.integrator)
         if self.fixed_step is None:
             return options
         steps = int(math.ceil(duration / self.fixed_step - 1e-9))
@@ -159,7 +161,11 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
         source=where,
         fixed_step=None if "fixed_step" not in solver else float(solver["fixed_step"]),
         contact=raw.get("contact", {}).get("mode", "online"),
+        integrator=solver.get("integrator", "tsit5"),
     )
+    if scenario.integrator not in INTEGRATORS:
+        raise ValueError(f"{where}: [solver] integrator must be one of {INTEGRATORS}, got "
+                         f"{scenario.integrator!r}")
     if scenario.contact not in CONTACT_MODELS:
         raise ValueError(f"{where}: [contact] mode must be one of {CONTACT_MODELS}, got "
                          f"{scenario.contact!r}")

@@ -27,8 +27,10 @@ from ..contact.search import search_wheelset
 from ..contact.table import ContactTable, table_patches
 from ..contact.table_cache import contact_table
 from ..multibody import accelerations
+from ..multibody import quaternion as qt
+from ..multibody.forces import body_torque
 from .vehicle import Vehicle, VehicleParams, wheelset_states
-from .wheel_rail import ContactParameters, patch_loads
+from .wheel_rail import ContactParameters, patch_force_jacobian, patch_loads
 
 
 class OnlineContact(eqx.Module):
@@ -113,6 +115,38 @@ def contact_loads(vehicle: Vehicle, contact: ContactParameters, track, q, qdot, 
     return forces, torques, patches, patch_forces
 
 
+def wheelset_load_jacobian(contact: ContactParameters, patches, q_body, qdot_body, moment):
+    """d g / d (q, qdot) (7, 14): the derivative of a wheelset's generalized wheel-rail
+    load g (7,) (force, then the Euler-parameter components of the moment) with
+    respect to its own coordinates q_body (7,) and velocities qdot_body (7,), the
+    patches held where they are (:func:`jaxrail.vehicles.wheel_rail.patch_force_jacobian`).
+    ``moment`` (3,) [N m]: the wheel-rail moment about the centre at this state.
+
+    These are the stiff parts of the contact loads (:mod:`jaxrail.multibody.imex`):
+    the normal stiffness and the creep damping; the geometric terms left out are slow."""
+    r, p, pdot = q_body[:3], q_body[3:], qdot_body[3:]
+    e = qt.e_matrix(p)
+    omega_of_p = jax.jacfwd(lambda x: 2.0 * qt.e_matrix(x) @ pdot)(p)  # (3, 4)
+    eye, z3, z4 = jnp.eye(3), jnp.zeros((3, 3)), jnp.zeros((3, 4))
+    # the wheelset's motion per unit change of (r, p, rdot, pdot)
+    d_shift = jnp.concatenate([eye, z4, z3, z4], axis=1)
+    d_turn = jnp.concatenate([z3, 2.0 * e, z3, z4], axis=1)
+    d_velocity = jnp.concatenate([z3, z4, eye, z4], axis=1)
+    d_omega = jnp.concatenate([z3, omega_of_p, z3, 2.0 * e], axis=1)
+    velocity, omega = qdot_body[:3], 2.0 * e @ pdot
+    one = lambda patch: patch_force_jacobian(contact, patch, r, velocity, omega, d_shift,  # noqa: E731
+                                             d_turn, d_velocity, d_omega)
+    d_forces = jax.vmap(jax.vmap(one))(patches)  # (2, P, 3, 14)
+    arms = patches.rail_point - r
+    d_moment = jnp.sum(jnp.cross(arms[..., :, None], d_forces, axisa=-2, axisb=-2, axisc=-2),
+                       axis=(0, 1))
+    torque = lambda x, n: body_torque(x, n)[3:]  # noqa: E731
+    by_moment, by_p = jax.jacfwd(torque, argnums=(1, 0))(p, moment)
+    d_generalized = by_moment @ d_moment + jnp.concatenate(
+        [jnp.zeros((4, 3)), by_p, jnp.zeros((4, 7))], axis=1)
+    return jnp.concatenate([jnp.sum(d_forces, axis=(0, 1)), d_generalized])
+
+
 class VehicleLoads(eqx.Module):
     """The loads on a vehicle's bodies as the ``external`` hook of
     :func:`jaxrail.multibody.accelerations`: ``loads(t, q, qdot)`` returns forces and
@@ -129,6 +163,17 @@ class VehicleLoads(eqx.Module):
 
     def __call__(self, t, q, qdot):
         return contact_loads(self.vehicle, self.contact, self.track, q, qdot, self.model)[:2]
+
+    def linearised(self, t, q, qdot):
+        """``(forces, torques, bodies, blocks)``: the loads of ``__call__``, the
+        wheelset body indices and each wheelset's load Jacobian (W, 7, 14)
+        (:func:`wheelset_load_jacobian`), from one contact evaluation."""
+        forces, torques, patches, _ = contact_loads(self.vehicle, self.contact, self.track,
+                                                    q, qdot, self.model)
+        index = np.asarray(self.vehicle.wheelsets)
+        blocks = jax.vmap(lambda x, a, b, m: wheelset_load_jacobian(self.contact, x, a, b, m))(
+            patches, q.reshape(-1, 7)[index], qdot.reshape(-1, 7)[index], torques[index])
+        return forces, torques, self.vehicle.wheelsets, blocks
 
 
 def vehicle_accelerations(vehicle: Vehicle, params: VehicleParams, track, t, q, qdot,

@@ -91,32 +91,82 @@ def _cube_root(x):
     return jnp.where(positive, jnp.cbrt(jnp.where(positive, x, 1.0)), 0.0)
 
 
-def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_velocity):
-    """Forces of one patch slot (scalars); ``patch`` is a ContactPatches entry."""
-    G, nu = params.shear_modulus, params.poisson
+def _patch_hertz(params: ContactParameters, patch):
+    """Hertz's solution for a unit load at a patch (stiffness scaled by
+    ``stiffness_scale``; NaN where the curvatures are not finite)."""
     # A diverged (NaN) state must stop its own run with a status, not raise Hertz's
     # curvature check for a whole batch: NaN curvatures go past the check and come back
     # as a NaN stiffness (finite states never have them, active or not).
     usable = jnp.isfinite(patch.curvature_wheel_x) & jnp.isfinite(patch.curvature_contact_y)
     radius_x = 1.0 / jnp.where(usable, patch.curvature_wheel_x, 1.0)
     unit = hertz_from_curvatures(1.0, radius_x, jnp.where(usable, patch.curvature_contact_y, 0.0),
-                                 0.0, G, nu, min_curvature_ratio=MIN_CURVATURE_RATIO)
+                                 0.0, G=params.shear_modulus, nu=params.poisson,
+                                 min_curvature_ratio=MIN_CURVATURE_RATIO)
     stiffness = jnp.where(usable, params.stiffness_scale * unit.stiffness, jnp.nan)
+    return unit, stiffness
+
+
+def _patch_rates(patch, centre, velocity, angular_velocity):
+    """The velocity-dependent inputs of a patch's force laws: ``(rate, xi, eta, phi,
+    speed)``: the penetration rate [m/s] (the wheel point moving into the rail along
+    the normal), the creepages at the middle of the overlap and the rolling speed
+    [m/s]."""
     wheel_point_velocity = velocity + jnp.cross(angular_velocity, patch.wheel_point - centre)
     rate = -wheel_point_velocity @ patch.normal
-    normal_force = jnp.where(patch.active,
-                             params.normal_law.force(stiffness, patch.penetration, rate), 0.0)
-    growth = _cube_root(normal_force)  # Hertz: a, b grow as N^(1/3)
-    a, b = unit.a * growth, unit.b * growth
     # Creepages at the middle of the overlap: the deformed interface of two bodies of
     # the same steel (the rail point would bias xi by -delta/r, the wheel point by +).
     interface = 0.5 * (patch.wheel_point + patch.rail_point)
     xi, eta, phi = creepages(velocity, angular_velocity, centre, interface, patch.frame)
-    fx, fy = polach(normal_force, params.friction, a, b, xi, eta, phi, G, nu,
-                    parameters=params.polach, rolling_speed=jnp.abs(velocity @ patch.frame[:, 0]))
+    return rate, xi, eta, phi, jnp.abs(velocity @ patch.frame[:, 0])
+
+
+def _patch_laws(params: ContactParameters, active, unit, stiffness, penetration, rate, xi,
+                eta, phi, speed):
+    """``(normal_force, fx, fy, a, b)`` of one patch from its law inputs."""
+    normal_force = jnp.where(active, params.normal_law.force(stiffness, penetration, rate), 0.0)
+    growth = _cube_root(normal_force)  # Hertz: a, b grow as N^(1/3)
+    a, b = unit.a * growth, unit.b * growth
+    fx, fy = polach(normal_force, params.friction, a, b, xi, eta, phi, params.shear_modulus,
+                    params.poisson, parameters=params.polach, rolling_speed=speed)
+    return normal_force, fx, fy, a, b
+
+
+def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_velocity):
+    """Forces of one patch slot (scalars); ``patch`` is a ContactPatches entry."""
+    unit, stiffness = _patch_hertz(params, patch)
+    rate, xi, eta, phi, speed = _patch_rates(patch, centre, velocity, angular_velocity)
+    normal_force, fx, fy, a, b = _patch_laws(params, patch.active, unit, stiffness,
+                                             patch.penetration, rate, xi, eta, phi, speed)
     frame = patch.frame
     force = normal_force * frame[:, 2] + fx * frame[:, 0] + fy * frame[:, 1]
     return PatchForces(normal_force, fx, fy, xi, eta, phi, a, b, stiffness, force)
+
+
+def patch_force_jacobian(params: ContactParameters, patch, centre, velocity,
+                         angular_velocity, d_shift, d_turn, d_velocity, d_angular_velocity):
+    """d force / d x (3, m): the global force on the wheel at one patch as m
+    quantities x of the wheelset change, the patch's points, frame and curvatures
+    held.
+
+    ``d_shift``, ``d_turn`` (3, m): derivatives of the wheelset centre's displacement
+    [m] and small rotation [rad]; ``d_velocity``, ``d_angular_velocity`` (3, m): of its
+    velocity and angular velocity; all global. The penetration follows the wheel
+    point's displacement along the normal (the normal stiffness), the penetration rate
+    and creepages follow the velocities (the creep damping). The force laws are
+    differentiated in their six scalar inputs only (penetration, rate, creepages,
+    rolling speed), so the cost does not grow with m."""
+    unit, stiffness = _patch_hertz(params, patch)
+    arm = patch.wheel_point - centre
+    moved = d_shift + jnp.cross(d_turn.T, arm).T
+    d_penetration = -(patch.normal @ moved)
+    rates = lambda v, w: jnp.stack(_patch_rates(patch, centre, v, w))  # noqa: E731
+    by_velocity, by_omega = jax.jacfwd(rates, argnums=(0, 1))(velocity, angular_velocity)
+    d_inputs = jnp.concatenate([d_penetration[None, :],
+                                by_velocity @ d_velocity + by_omega @ d_angular_velocity])
+    inputs = jnp.concatenate([patch.penetration[None], rates(velocity, angular_velocity)])
+    laws = lambda u: jnp.stack(_patch_laws(params, patch.active, unit, stiffness, *u)[:3])  # noqa: E731
+    d_laws = jax.jacfwd(laws)(inputs) @ d_inputs  # (N, fx, fy) by x
+    return patch.frame[:, jnp.array([2, 0, 1])] @ d_laws
 
 
 def patch_loads(params: ContactParameters, patches, position, velocity, angular_velocity):

@@ -2,6 +2,7 @@
 jaxrail.simulate) hunts with Klingel's kinematic wavelength 2 pi sqrt(r0 e / tan(gamma)) at low speed."""
 
 import numpy as np
+import pytest
 
 from jaxrail.profiles import rail_offset, uic60
 from jaxrail.profiles.analytic import conical_wheel
@@ -9,12 +10,14 @@ from jaxrail.track import straight_track
 from jaxrail.vehicles import simulate_single_wheelset
 
 
-def test_klingel_wavelength_within_5_percent():
+@pytest.mark.parametrize("integrator", ["tsit5", "imex"])
+def test_klingel_wavelength_within_5_percent(integrator):
     cone, speed, distance = 0.05, 5.0, 20.0
     wheel, rail = conical_wheel(cone), uic60()
     t1 = distance / speed
     result, (_, patches) = simulate_single_wheelset(
-        wheel, rail, straight_track(50.0), rail_offset(rail), speed, 2e-3, t1, n_outputs=801)
+        wheel, rail, straight_track(50.0), rail_offset(rail), speed, 2e-3, t1, n_outputs=801,
+        integrator=integrator)
     assert result.status == "successful"
     q = np.asarray(result.q)
     assert np.all(np.isfinite(q))

@@ -1,0 +1,203 @@
+"""A linearly implicit IMEX integrator for eq. (19) with stiff body loads.
+
+The wheel-rail creep forces act on each wheelset like a damper of time constant
+about 0.4 ms at 18.3 m/s (the spin against the longitudinal creep), far shorter than
+the motion of interest: an explicit method is held to steps of about 0.3 ms by
+stability. :class:`IMEX` treats those loads implicitly through their Jacobian and
+everything else explicitly, so its steps follow accuracy instead.
+
+Method: an additive Runge-Kutta method (Kennedy and Carpenter's KenCarp3/4/5, the
+tableaus diffrax ships) on the exact split
+
+    f(y) = [f(y) - J (y - y0)] + J (y - y0),
+
+explicit in the first term and implicit (ESDIRK, L-stable) in the second, with J
+frozen at the step's start y0. The split is exact, so the method keeps its order
+whatever J is; J decides only which modes stay stable at long steps. The implicit
+term is linear, so each stage is one solve with I - h gamma J (the same matrix for
+every stage) and no Newton iteration. Per step: one Jacobian of the stiff loads and
+s right-hand sides (s = 4, 6, 8 stages for KenCarp3, 4, 5).
+
+J = [[0, I], [A_q, A_v]] with y = (q, qdot): the accelerations' dependence on the
+positions and velocities of the bodies whose loads are stiff, through those loads
+only (``external.linearised``, e.g. :meth:`jaxrail.vehicles.VehicleLoads.linearised`).
+A_q, A_v have 7 columns per such body, so each stage solves a (7 k, 7 k) system
+(28 x 28 for four wheelsets) instead of the whole state's. Without ``linearised``
+J = 0 and the method is the explicit KenCarp tableau.
+"""
+
+from typing import ClassVar
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import jax.scipy.linalg
+import numpy as np
+
+from .system import acceleration_response, accelerations, rhs
+
+METHODS = {"KenCarp3": 3, "KenCarp4": 4, "KenCarp5": 5}
+
+
+class StiffJacobian(eqx.Module):
+    """J = [[0, I], [A_q, A_v]] of y = (q, qdot) with A_q, A_v nonzero only in the
+    ``columns`` (the coordinates of the bodies with stiff loads).
+
+    Fields: columns (c,) static indices into q; a_q, a_v (7 n, c): accelerations per
+    unit change of those coordinates [1/s^2] and velocities [1/s]."""
+
+    columns: tuple[int, ...] = eqx.field(static=True)
+    a_q: jax.Array
+    a_v: jax.Array
+
+    def matvec(self, x):
+        """J x for x = (x_q, x_v)."""
+        x_q, x_v = x
+        index = np.asarray(self.columns, dtype=int)
+        return x_v, self.a_q @ x_q[index] + self.a_v @ x_v[index]
+
+    def factor(self, hg):
+        """The pieces of (I - hg J)^-1: with B = hg A_v + hg^2 A_q (columns c only),
+        x_v = r + B x_c and (I - B_cc) x_c = r_c, r = b_v + hg A_q b_q[c]."""
+        index = np.asarray(self.columns, dtype=int)
+        b = hg * self.a_v + hg * hg * self.a_q
+        lu = jax.scipy.linalg.lu_factor(jnp.eye(index.size, dtype=b.dtype) - b[index])
+        return b, lu
+
+    def solve(self, hg, factored, rhs_):
+        """x = (I - hg J)^-1 rhs_ for rhs_ = (b_q, b_v), with ``factored`` from
+        :meth:`factor` for the same hg."""
+        b_q, b_v = rhs_
+        b, lu = factored
+        index = np.asarray(self.columns, dtype=int)
+        r = b_v + hg * (self.a_q @ b_q[index])
+        x_c = jax.scipy.linalg.lu_solve(lu, r[index])
+        x_v = r + b @ x_c
+        return b_q + hg * x_v, x_v
+
+
+class _FixedLoads(eqx.Module):
+    """An ``external`` hook that returns loads computed beforehand."""
+
+    forces: jax.Array
+    torques: jax.Array
+
+    def __call__(self, t, q, qdot):
+        return self.forces, self.torques
+
+
+def stiff_jacobian(system, params, t, q, qdot, external):
+    """(f(y) = (qdot, qddot), :class:`StiffJacobian`) at y = (q, qdot).
+
+    ``external.linearised(t, q, qdot)`` returns ``(forces, torques, bodies, blocks)``:
+    the loads as ``external(t, q, qdot)`` does, the indices of the bodies with stiff
+    loads (static) and ``blocks`` (k, 7, 14), the derivative of each such body's
+    generalized load with respect to its own (q, qdot) (7 + 7 coordinates). The contact
+    is evaluated once for both. Without it, J = 0."""
+    if external is None or not hasattr(external, "linearised"):
+        n7 = q.shape[0]
+        empty = jnp.zeros((n7, 0), dtype=q.dtype)
+        return rhs(t, (q, qdot), (system, params, external)), StiffJacobian((), empty, empty)
+    forces, torques, bodies, blocks = external.linearised(t, q, qdot)
+    qddot, _ = accelerations(system, params, t, q, qdot, _FixedLoads(forces, torques))
+    columns = tuple(7 * b + i for b in bodies for i in range(7))
+    response = acceleration_response(system, params, q, qdot, bodies, blocks)  # (7n, k, 14)
+    a_q = response[:, :, :7].reshape(q.shape[0], -1)
+    a_v = response[:, :, 7:].reshape(q.shape[0], -1)
+    return (qdot, qddot), StiffJacobian(columns, a_q, a_v)
+
+
+def _dense_info(h, y0, y1, f0):
+    """Cubic Hermite data for output between steps: q from q and qdot at both ends
+    (exact derivatives: a spinning wheelset's Euler parameters stay on their sphere to
+    O(h^4), where linear interpolation shortens them by theta^2 / 32 and moves its
+    wheel points by tens of micrometres), qdot from the parabola through qdot0, qdot1
+    with slope qddot0 (``f0`` = (qdot0, qddot0))."""
+    (q0, v0), (q1, v1), (_, a0) = y0, y1, f0
+    k0 = (h * v0, h * a0)
+    k1 = (h * v1, 2.0 * (v1 - v0) - h * a0)
+    return dict(y0=y0, y1=y1, k0=k0, k1=k1)
+
+
+
+
+def _weighted(rows, stacked):
+    """sum_j rows[j] * stacked[j] over the leading (stage) axis of each leaf."""
+    return jax.tree.map(lambda x: jnp.tensordot(rows, x, axes=1), stacked)
+
+
+def _tableau(method):
+    """(c (s,), explicit a (s, s), implicit a (s, s), b (s,), b - b_embedded (s,),
+    gamma) of a KenCarp method as numpy arrays (a strictly lower triangular; the
+    implicit diagonal is gamma from the second stage on)."""
+    explicit, implicit = getattr(diffrax, method).tableau.tableaus
+    s = len(explicit.b_sol)
+    a_e, a_i = np.zeros((s, s)), np.zeros((s, s))
+    for i in range(1, s):
+        a_e[i, :i] = explicit.a_lower[i - 1]
+        a_i[i, :i] = implicit.a_lower[i - 1]
+    c = np.concatenate([[0.0], np.asarray(explicit.c)])
+    return (c, a_e, a_i, np.asarray(explicit.b_sol), np.asarray(explicit.b_error),
+            float(implicit.a_diagonal[1]))
+
+
+class IMEX(diffrax.AbstractAdaptiveSolver):
+    """The linearly implicit additive Runge-Kutta method of the module docstring for
+    :func:`jaxrail.multibody.rhs` (``args = (system, params, external)``): the stiff
+    loads of ``external.linearised`` implicit, the rest explicit. ``method``: one of
+    :data:`METHODS` (order 3, 4 or 5, with an embedded solution one order lower for
+    the step-size controller). Output between steps by cubic Hermite interpolation.
+    The stages run in a loop, so the right-hand side is compiled once."""
+
+    method: str = eqx.field(static=True, default="KenCarp5")
+
+    term_structure: ClassVar = diffrax.AbstractTerm
+    interpolation_cls: ClassVar = diffrax.ThirdOrderHermitePolynomialInterpolation
+
+    def __check_init__(self):
+        if self.method not in METHODS:
+            raise ValueError(f"IMEX method must be one of {sorted(METHODS)}, got "
+                             f"{self.method!r}")
+
+    def order(self, terms):
+        return METHODS[self.method]
+
+    def error_order(self, terms):
+        return METHODS[self.method]
+
+    def init(self, terms, t0, t1, y0, args):
+        return None
+
+    def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        del solver_state, made_jump
+        system, params, *rest = args
+        external = rest[0] if rest else None
+        c, a_e, a_i, b, b_error, gamma = _tableau(self.method)
+        s = b.size
+        h = t1 - t0
+        hg = h * gamma
+        f0, jac = stiff_jacobian(system, params, t0, *y0, external)
+        factored = jac.factor(hg)
+        # per stage: the whole right-hand side f and its implicit part J (Y - y0)
+        f_all = jax.tree.map(lambda x: jnp.zeros((s,) + x.shape, x.dtype).at[0].set(x), f0)
+        f_stiff = jax.tree.map(lambda x: jnp.zeros((s,) + x.shape, x.dtype), f0)
+        a_e, a_i, c = (jnp.asarray(x) for x in (a_e, a_i, c))
+
+        def stage(i, carry):
+            f_all, f_stiff = carry
+            explicit = jax.tree.map(jnp.subtract, f_all, f_stiff)
+            right = jax.tree.map(lambda x, y: h * (x + y), _weighted(a_e[i], explicit),
+                                 _weighted(a_i[i], f_stiff))
+            z = jac.solve(hg, factored, right)
+            f = terms.vf(t0 + c[i] * h, jax.tree.map(jnp.add, y0, z), args)
+            put = lambda stacked, x: jax.tree.map(lambda u, v: u.at[i].set(v), stacked, x)  # noqa: E731
+            return put(f_all, f), put(f_stiff, jac.matvec(z))
+
+        f_all, _ = jax.lax.fori_loop(1, s, stage, (f_all, f_stiff))
+        y1 = jax.tree.map(lambda y, d: y + h * d, y0, _weighted(jnp.asarray(b), f_all))
+        error = jax.tree.map(lambda d: h * d, _weighted(jnp.asarray(b_error), f_all))
+        return y1, error, _dense_info(h, y0, y1, f0), None, diffrax.RESULTS.successful
+
+    def func(self, terms, t0, y0, args):
+        return terms.vf(t0, y0, args)
