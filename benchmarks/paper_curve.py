@@ -2,16 +2,22 @@
 for 41 s, with the simplified and the real S1002 profiles (built-in scenarios
 ``paper-curve-simplified`` and ``paper-curve``).
 
-Prints JSON per profile kind: compile time, wall time, simulated time, real-time
-factor, steps accepted and rejected, right-hand-side evaluations (Tsit5: 6 per attempted
-step), status. With ``--save DIR`` it also keeps each run (``DIR/<scenario>.pkl``, the
+Prints JSON per profile kind, contact model (``--contacts online table``) and
+integrator (``--integrators tsit5 imex``), all in one process: compile time, wall
+time, simulated time, real-time factor, steps accepted and rejected, right-hand-side
+evaluations (Tsit5: 6 per attempted step; IMEX: 8 and one Jacobian of the wheel-rail
+loads), status; for every run after the first of a profile and contact model, its
+largest differences from that first run (leading wheelset lateral displacement [mm],
+outer wheel's normal force [% of its largest]). With ``--save DIR`` it also keeps each run (``DIR/<scenario>.pkl``, the
 SimulationResult as numpy arrays, for experiments/paper_curve/figures.py), its results
 file (``.h5``) and summary (``.json``).
 Usage: ``python benchmarks/paper_curve.py [--duration 41] [--save DIR]
-[--scenarios paper-curve-simplified paper-curve]``.
+[--scenarios paper-curve-simplified paper-curve] [--contacts online]
+[--integrators tsit5 imex]``.
 """
 
 import argparse
+import dataclasses
 import json
 import os
 import pickle
@@ -28,7 +34,8 @@ enable_float64()
 from jaxrail._files import write_atomically  # noqa: E402
 from jaxrail.scenarios import load_scenario, run_scenario  # noqa: E402
 
-STAGES = 6
+STAGES = {"tsit5": 6, "imex": 8}
+OUTER = 1  # the right wheel is the outer one in the paper's left curve
 
 
 def main():
@@ -37,32 +44,64 @@ def main():
     parser.add_argument("--save", type=Path, default=None, help="keep the runs in DIR")
     parser.add_argument("--scenarios", nargs="+",
                         default=["paper-curve-simplified", "paper-curve"])
+    parser.add_argument("--contacts", nargs="+", default=["online"],
+                        choices=("online", "table"))
+    parser.add_argument("--integrators", nargs="+", default=["tsit5", "imex"],
+                        choices=("tsit5", "imex"))
     parser.add_argument("--progress", action="store_true")
     args = parser.parse_args()
     runs = []
     for name in args.scenarios:
-        scenario = load_scenario(name)
-        result, vehicle, params, _ = run_scenario(scenario, args.duration, args.progress)
-        steps = int(result.steps)
-        wall = float(result.wall_time_s)
-        runs.append({
-            "scenario": name, "wheel": scenario.wheel, "status": result.status,
-            "compile_time_s": round(float(result.compile_time_s), 1),
-            "wall_time_s": round(wall, 1), "simulated_time_s": result.simulated_time_s,
-            "real_time_factor": round(result.simulated_time_s / wall, 4),
-            "steps_accepted": int(result.accepted_steps),
-            "steps_rejected": int(result.rejected_steps),
-            "rhs_evaluations": STAGES * steps + 1,
-            "max_constraint_violation_m": float(np.nanmax(result.constraint_violation)),
-            "any_nan_in_valid_outputs": bool(np.any(np.isnan(
-                np.asarray(result.wheelset_lateral)[np.asarray(result.valid)]))),
-        })
-        print(json.dumps(runs[-1]), flush=True)
-        if args.save is not None:
-            _save(args.save, name, scenario, result, vehicle, params)
+        for contact in args.contacts:
+            first = None
+            for integrator in args.integrators:
+                scenario = dataclasses.replace(load_scenario(name), integrator=integrator)
+                result, vehicle, params, _ = run_scenario(scenario, args.duration,
+                                                          args.progress, contact=contact)
+                runs.append(_report(name, scenario, contact, integrator, result, first))
+                print(json.dumps(runs[-1]), flush=True)
+                first = result if first is None else first
+                if args.save is not None:
+                    _save(args.save, f"{name}-{contact}-{integrator}", scenario, result,
+                          vehicle, params)
     print(json.dumps({"benchmark": "paper_curve", "runs": runs,
                       "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
                                   "load": os.getloadavg()}}, indent=2))
+
+
+def _outer_force(result):
+    return np.nansum(np.asarray(result.wheels.normal_force)[:, 0, OUTER], axis=-1)
+
+
+def _report(name, scenario, contact, integrator, result, reference):
+    steps = int(result.steps)
+    wall = float(result.wall_time_s)
+    report = {
+        "scenario": name, "wheel": scenario.wheel, "contact": contact,
+        "integrator": integrator, "status": result.status,
+        "compile_time_s": round(float(result.compile_time_s), 1),
+        "wall_time_s": round(wall, 1), "simulated_time_s": result.simulated_time_s,
+        "real_time_factor": round(result.simulated_time_s / wall, 4),
+        "steps_accepted": int(result.accepted_steps),
+        "steps_rejected": int(result.rejected_steps),
+        "mean_step_ms": round(1e3 * result.simulated_time_s / int(result.accepted_steps), 3),
+        "rhs_evaluations": STAGES[integrator] * steps + 1,
+        "max_constraint_violation_m": float(np.nanmax(result.constraint_violation)),
+        "any_nan_in_valid_outputs": bool(np.any(np.isnan(
+            np.asarray(result.wheelset_lateral)[np.asarray(result.valid)]))),
+    }
+    if reference is not None:
+        valid = np.asarray(result.valid) & np.asarray(reference.valid)
+        lateral = [np.asarray(r.wheelset_lateral)[valid, 0] for r in (reference, result)]
+        force = [_outer_force(r)[valid] for r in (reference, result)]
+        report["vs_first"] = {
+            "max_leading_lateral_difference_mm": float(1e3 * np.max(np.abs(
+                lateral[1] - lateral[0]))),
+            "max_outer_normal_force_difference_percent": float(
+                100 * np.max(np.abs(force[1] - force[0])) / np.max(force[0])),
+            "outer_max_normal_force_N": [float(np.max(f)) for f in force],
+        }
+    return report
 
 
 def _save(directory, name, scenario, result, vehicle, params):

@@ -25,6 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._compiler import compile_lowered
+from ._progress import SimulatedTimeProgress
 from .multibody import constraints, simulate_system
 from .multibody.imex import IMEX
 from .track import to_track_coordinates, track_frame
@@ -58,7 +59,7 @@ class SolverOptions:
     n_outputs: number of equally spaced output times (including t = 0 and t1);
     (defaults measured in docs/simulation.md: rtol 1e-4 moves the wheelsets' lateral
     displacement by under 10 um against 1e-5 in 0.5 s, in two thirds of the steps)
-    progress: show a tqdm progress bar of simulated time.
+    progress: show a progress bar of simulated seconds with the real-time factor.
     pcoeff, icoeff: the PID controller's proportional and integral coefficients
     (0.4 and 0.3: in flange contact the steps are limited by stability, where diffrax's
     plain integral controller (0 and 1) rejects one step in five; see docs/simulation.md).
@@ -242,7 +243,7 @@ def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignmen
         q0, qdot0 = (jnp.asarray(x, dtype=jnp.float64) for x in initial)
     _, rest_vertical, _, rest_heights = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
     ts = jnp.linspace(0.0, t1, options.n_outputs)
-    meter = diffrax.TqdmProgressMeter() if options.progress else None
+    meter = SimulatedTimeProgress(duration=t1) if options.progress else None
     controller, dt0 = options.controller()
     sol = simulate_system(
         vehicle.system, params.system, q0, qdot0, t1, dt0=dt0,
