@@ -474,6 +474,17 @@ def _minimum_norm_solution(phi_q, rhs):
     return phi_q.T @ jnp.linalg.solve(phi_q @ phi_q.T, rhs)
 
 
+def project_state(system: System, params: SystemParams, q, qdot):
+    """(q, qdot) moved onto the constraints by one Gauss-Newton step, q - Phi_q^+ Phi,
+    then qdot projected onto Phi_q qdot = 0 (minimum-norm corrections; for the small
+    drift an integration step leaves, the second step would change q by about
+    |Phi|^2)."""
+    phi, phi_q, _, _ = constraints(system, params, q, qdot)
+    q = q - _minimum_norm_solution(phi_q, phi)
+    _, phi_q, _, _ = constraints(system, params, q, qdot)
+    return q, qdot - _minimum_norm_solution(phi_q, phi_q @ qdot)
+
+
 @eqx.filter_jit
 def consistent_initial_conditions(system: System, params: SystemParams, q0, qdot0,
                                   iterations: int = 12):
