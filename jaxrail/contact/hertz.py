@@ -45,6 +45,7 @@ the true derivative d a / d N ~ N^(-2/3) is infinite there. Negative N counts as
 """
 
 import functools
+import inspect
 import math
 
 import equinox as eqx
@@ -64,13 +65,16 @@ METHODS = ("table", "exact")
 
 def _compiled(fn):
     """``eqx.filter_jit`` with every argument but ``min_curvature_ratio`` and ``method``
-    traced.
+    traced, and the curvature sums ``A``, ``B`` checked (> 0) when they are concrete.
 
     filter_jit alone treats Python floats as static (one compilation per value); the
-    conversion to float64 arrays happens outside, so jit traces them. filter_jit (not
-    jax.jit) keeps the messages of ``eqx.error_if`` readable.
+    conversion to float64 arrays happens outside, so jit traces them. The check runs
+    here, on the host, so that the compiled programs hold no error callback (programs
+    with callbacks cannot go into JAX's persistent compilation cache); traced
+    non-positive sums give NaN.
     """
     jitted = eqx.filter_jit(fn)
+    signature = inspect.signature(fn)
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
@@ -80,6 +84,7 @@ def _compiled(fn):
             k: v if k in _STATIC_KWARGS else jnp.asarray(v, dtype=jnp.float64)
             for k, v in kwargs.items()
         }
+        _check_curvatures(signature.bind_partial(*args, **kwargs).arguments)
         return jitted(*args, **kwargs)
 
     return wrapper
@@ -278,12 +283,15 @@ def _coefficients_of_t(t, method):
     raise ValueError(f"hertz: method must be one of {METHODS}, got {method!r}")
 
 
-def _check_curvatures(a_curv, b_curv):
-    a_curv = jnp.asarray(a_curv, dtype=jnp.float64)
-    b_curv = jnp.asarray(b_curv, dtype=jnp.float64)
-    a_curv = eqx.error_if(a_curv, ~(a_curv > 0.0), "hertz: curvature sum A must be > 0")
-    b_curv = eqx.error_if(b_curv, ~(b_curv > 0.0), "hertz: curvature sum B must be > 0")
-    return a_curv, b_curv
+def _check_curvatures(arguments):
+    """Raise ValueError if a concrete curvature sum ``A`` or ``B`` is not > 0."""
+    for name in ("A", "B"):
+        value = arguments.get(name)
+        if value is None or isinstance(value, jax.core.Tracer):
+            continue
+        if not np.all(np.asarray(value) > 0.0):
+            raise ValueError(f"hertz: curvature sum {name} must be > 0 [1/m], got "
+                             f"{np.asarray(value).min()}")
 
 
 @_compiled
@@ -296,7 +304,7 @@ def hertz_coefficients(
     (Newton solve with elliptic integrals); see the module docstring.
     """
     require_float64("hertz_coefficients")
-    A, B = _check_curvatures(A, B)
+    A, B = jnp.asarray(A, dtype=jnp.float64), jnp.asarray(B, dtype=jnp.float64)
     return _coefficients_of_t(jnp.log(B) - jnp.log(A), method)
 
 
