@@ -14,9 +14,29 @@ m/s^2 in accelerations of 400 m/s^2).
 Options go to each compilation (``jax.jit(..., compiler_options=...)`` or
 ``Lowered.compile``), never to the process-wide ``XLA_FLAGS``: importing jaxrail
 changes nothing for other code in the process.
+
+Persistent compilation cache. Before its first compilation jaxrail turns on JAX's
+persistent compilation cache, so that a second run of the same scenario (in a new
+process) loads its programs instead of compiling them: in ``$JAX_COMPILATION_CACHE_DIR``
+when that is set (or wherever ``jax_compilation_cache_dir`` already points), else in
+``~/.cache/jaxrail/xla`` (``$JAXRAIL_CACHE_DIR/xla``). ``JAXRAIL_COMPILATION_CACHE=off``
+(or JAX's own ``JAX_ENABLE_COMPILATION_CACHE=false``) leaves it off. The cache is
+keyed by the program, the compiler options, the jax version and the machine; JAX
+keeps only programs that took over a second to compile. JAX does not keep programs
+that call back to Python, so jaxrail's programs are traced with equinox's runtime
+checks (``eqx.error_if``, e.g. diffrax's checks of its inputs) returning NaN instead
+of raising through a callback: a run that fails them ends with a non-finite state
+and the status "failed".
 """
 
+import contextlib
+import os
+
+import equinox._errors
 import jax
+
+from ._files import cache_root
+from ._program_cache import compile_through_program_cache
 
 _CPU_OPTIONS = {
     "xla_cpu_scheduler_type": "CPU_SCHEDULER_TYPE_MEMORY_OPTIMIZED",
@@ -30,6 +50,51 @@ def compiler_options() -> dict:
     return dict(_CPU_OPTIONS) if jax.default_backend() == "cpu" else {}
 
 
-def compile_lowered(lowered):
-    """``lowered.compile()`` with :func:`compiler_options`."""
-    return lowered.compile(compiler_options())
+@contextlib.contextmanager
+def _checks_as_nan():
+    """Trace ``eqx.error_if`` as NaN-returning (no host callback) inside the block."""
+    saved = equinox._errors.EQX_ON_ERROR
+    equinox._errors.EQX_ON_ERROR = "nan"
+    try:
+        yield
+    finally:
+        equinox._errors.EQX_ON_ERROR = saved
+
+
+def persistent_cache_folder():
+    """The folder :func:`use_persistent_cache` puts compiled programs in, or None if the
+    cache is turned off (module docstring)."""
+    if os.environ.get("JAXRAIL_COMPILATION_CACHE", "on").lower() in ("0", "off", "false", "no"):
+        return None
+    if not jax.config.jax_enable_compilation_cache:
+        return None
+    return jax.config.jax_compilation_cache_dir or str(cache_root() / "xla")
+
+
+def use_persistent_cache() -> None:
+    """Turn JAX's persistent compilation cache on in :func:`persistent_cache_folder`
+    (nothing if it is off or already configured)."""
+    folder = persistent_cache_folder()
+    if folder is not None and jax.config.jax_compilation_cache_dir != folder:
+        jax.config.update("jax_compilation_cache_dir", folder)
+
+
+def program_folder():
+    """Where traced programs are kept (:mod:`jaxrail._program_cache`): beside jaxrail's
+    other caches, or None when the persistent cache is off."""
+    return None if persistent_cache_folder() is None else cache_root() / "programs"
+
+
+def compile_function(function, *args, **kwargs):
+    """``function`` compiled for these arguments with :func:`compiler_options`, without
+    host callbacks, through the persistent cache (:func:`use_persistent_cache`).
+
+    ``function``: a jitted function (it has ``.lower``): lowered here; or a plain
+    Python function: through the traced-program cache of :mod:`jaxrail._program_cache`
+    (single-device programs). Returns the compiled callable."""
+    use_persistent_cache()
+    with _checks_as_nan():
+        if hasattr(function, "lower"):
+            return function.lower(*args, **kwargs).compile(compiler_options())
+        return compile_through_program_cache(function, program_folder(), compiler_options(),
+                                             *args, **kwargs)

@@ -5,6 +5,14 @@ left as it was."""
 
 import os
 import tempfile
+from pathlib import Path
+
+
+def cache_root() -> Path:
+    """jaxrail's cache folder: ``$JAXRAIL_CACHE_DIR``, else ``~/.cache/jaxrail`` (not
+    created)."""
+    root = os.environ.get("JAXRAIL_CACHE_DIR")
+    return Path(root) if root else Path.home() / ".cache" / "jaxrail"
 
 
 def write_atomically(path, write) -> None:

@@ -24,8 +24,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._compiler import compile_lowered
-from ._progress import SimulatedTimeProgress
+from ._compiler import compile_function
+from ._progress import SimulatedTimeBar
 from .multibody import constraints, simulate_system
 from .multibody.imex import IMEX
 from .track import to_track_coordinates, track_frame
@@ -225,6 +225,56 @@ def _wheel_outputs(vehicle, params, track, q, qdot, model):
                         forces.creepage_y, forces.spin, lateral, vertical)
 
 
+def _integrate(vehicle, track, params, loads, q0, qdot0, rest_heights, t0, t1, ts, dt0,
+               options, limits, solver, adjoint):
+    """diffrax's Solution of eq. (19) from (q0, qdot0) at t0 to t1 [s], saved at ``ts``,
+    stopped by the derailment event; ``dt0`` [s]: the first step."""
+    controller, _ = options.controller()
+    return simulate_system(
+        vehicle.system, params.system, q0, qdot0, t1, t0=t0, dt0=dt0,
+        saveat=diffrax.SaveAt(ts=ts), rtol=options.rtol, atol=options.atol,
+        solver=options.solver() if solver is None else solver,
+        external=loads, max_steps=options.max_steps, adjoint=adjoint, throw=False,
+        stepsize_controller=controller,
+        event=_derailment_event(vehicle, track, limits, rest_heights))
+
+
+def _results(vehicle, track, params, model, q0, qdot0, ts, q, qdot, result, derailed,
+             steps, accepted_steps, rejected_steps):
+    """SimulationResult from the states at the output times (non-finite rows: not
+    reached), without host timings."""
+    _, rest_vertical, _, _ = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
+    valid = jnp.all(jnp.isfinite(q), axis=1) & jnp.all(jnp.isfinite(qdot), axis=1)
+    # Outputs after an early stop are recomputed at the initial state and masked.
+    q_safe = jnp.where(valid[:, None], q, q0)
+    qdot_safe = jnp.where(valid[:, None], qdot, qdot0)
+    lateral, vertical, yaw, _ = jax.vmap(
+        lambda a, b: _wheelset_track_coordinates(vehicle, track, a, b))(q_safe, qdot_safe)
+    wheels = jax.lax.map(lambda y: _wheel_outputs(vehicle, params, track, *y, model),
+                         (q_safe, qdot_safe))
+    n_norm = vehicle.system.n_bodies
+    violation = jax.vmap(lambda a, b: jnp.max(jnp.abs(
+        constraints(vehicle.system, params.system, a, b)[0][n_norm:]), initial=0.0))(
+        q_safe, qdot_safe)
+    nan = lambda x: jnp.where(valid.reshape((-1,) + (1,) * (x.ndim - 1)), x, jnp.nan)  # noqa: E731
+    wheels = jax.tree.map(lambda x: nan(x) if jnp.issubdtype(x.dtype, jnp.floating) else x,
+                          wheels)
+    return SimulationResult(
+        t=ts, q=q, qdot=qdot, valid=valid, wheelset_lateral=nan(lateral),
+        wheelset_vertical=nan(vertical - rest_vertical), wheelset_yaw=nan(yaw),
+        wheels=wheels, constraint_violation=nan(violation), result=result,
+        derailed=jnp.asarray(derailed), steps=steps, accepted_steps=accepted_steps,
+        rejected_steps=rejected_steps, wall_time_s=jnp.asarray(jnp.nan),
+        compile_time_s=jnp.asarray(jnp.nan))
+
+
+def _start(vehicle, track, params, speed, misalignment, s0, initial, model):
+    """(q0, qdot0): ``initial``, or the static equilibrium."""
+    if initial is None:
+        return initial_state(vehicle, params, track, speed, misalignment, s0, model)
+    return tuple(jnp.asarray(x, dtype=jnp.float64) for x in initial)
+
+
 def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignment=0.0,
           s0=None, options: SolverOptions = SolverOptions(),
           limits: DerailmentLimits = DerailmentLimits(), solver=None, adjoint=None,
@@ -234,68 +284,115 @@ def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignmen
     ``misalignment`` [m] may be traced. ``initial``: ``(q0, qdot0)`` to start from
     instead of the static equilibrium (:func:`jaxrail.vehicles.initial_state`); wheel
     lifts and vertical displacements are measured from the initial state.
-    ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's search)."""
+    ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's search).
+    ``options.progress`` is not used here (:func:`simulate` draws the bar)."""
     loads = VehicleLoads(vehicle, params.contact, track, resolve_contact_model(contact_model))
-    if initial is None:
-        q0, qdot0 = initial_state(vehicle, params, track, speed, misalignment, s0,
-                                  loads.model)
-    else:
-        q0, qdot0 = (jnp.asarray(x, dtype=jnp.float64) for x in initial)
-    _, rest_vertical, _, rest_heights = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
+    q0, qdot0 = _start(vehicle, track, params, speed, misalignment, s0, initial, loads.model)
+    _, _, _, rest_heights = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
     ts = jnp.linspace(0.0, t1, options.n_outputs)
-    meter = SimulatedTimeProgress(duration=t1) if options.progress else None
-    controller, dt0 = options.controller()
-    sol = simulate_system(
-        vehicle.system, params.system, q0, qdot0, t1, dt0=dt0,
-        saveat=diffrax.SaveAt(ts=ts), rtol=options.rtol, atol=options.atol,
-        solver=options.solver() if solver is None else solver,
-        external=loads, max_steps=options.max_steps, adjoint=adjoint, throw=False,
-        stepsize_controller=controller,
-        event=_derailment_event(vehicle, track, limits, rest_heights), progress_meter=meter)
+    sol = _integrate(vehicle, track, params, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
+                     options.controller()[1], options, limits, solver, adjoint)
     q, qdot = sol.ys
-    valid = jnp.all(jnp.isfinite(q), axis=1) & jnp.all(jnp.isfinite(qdot), axis=1)
-    # Outputs after an early stop are recomputed at the initial state and masked.
-    q_safe = jnp.where(valid[:, None], q, q0)
-    qdot_safe = jnp.where(valid[:, None], qdot, qdot0)
-    lateral, vertical, yaw, _ = jax.vmap(
-        lambda a, b: _wheelset_track_coordinates(vehicle, track, a, b))(q_safe, qdot_safe)
-    wheels = jax.lax.map(lambda y: _wheel_outputs(vehicle, params, track, *y, loads.model),
-                         (q_safe, qdot_safe))
-    n_norm = vehicle.system.n_bodies
-    violation = jax.vmap(lambda a, b: jnp.max(jnp.abs(
-        constraints(vehicle.system, params.system, a, b)[0][n_norm:]), initial=0.0))(
-        q_safe, qdot_safe)
-    nan = lambda x: jnp.where(valid.reshape((-1,) + (1,) * (x.ndim - 1)), x, jnp.nan)  # noqa: E731
-    wheels = jax.tree.map(lambda x: nan(x) if jnp.issubdtype(x.dtype, jnp.floating) else x,
-                          wheels)
     derailed = sol.event_mask if sol.event_mask is not None else jnp.asarray(False)
-    return SimulationResult(
-        t=sol.ts, q=q, qdot=qdot, valid=valid, wheelset_lateral=nan(lateral),
-        wheelset_vertical=nan(vertical - rest_vertical), wheelset_yaw=nan(yaw),
-        wheels=wheels, constraint_violation=nan(violation), result=sol.result,
-        derailed=jnp.asarray(derailed), steps=sol.stats["num_steps"],
-        accepted_steps=sol.stats["num_accepted_steps"],
-        rejected_steps=sol.stats["num_rejected_steps"],
-        wall_time_s=jnp.asarray(jnp.nan), compile_time_s=jnp.asarray(jnp.nan))
+    return _results(vehicle, track, params, loads.model, q0, qdot0, sol.ts, q, qdot,
+                    sol.result, derailed, sol.stats["num_steps"],
+                    sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
 
 
-_solve_jit = eqx.filter_jit(solve)
-_initial_jit = eqx.filter_jit(initial_state)
+def _segment(vehicle, track, params, q0, qdot0, rest_heights, t0, t1, ts, dt0, options,
+             limits, solver, contact_model):
+    """One segment of a run with a progress bar: from (q0, qdot0) at t0 to t1 [s],
+    saved at ``ts`` (the last one is t1). Returns (q, qdot) at ``ts``, diffrax's result
+    code, whether the run derailed, and the steps taken, accepted and rejected."""
+    loads = VehicleLoads(vehicle, params.contact, track, contact_model)
+    sol = _integrate(vehicle, track, params, loads, q0, qdot0, rest_heights, t0, t1, ts,
+                     dt0, options, limits, solver, None)
+    derailed = sol.event_mask if sol.event_mask is not None else jnp.asarray(False)
+    return (sol.ys, sol.result, derailed, sol.stats["num_steps"],
+            sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
+
+
 _compiled = {}
+SEGMENTS = 50
+"""A run with a progress bar is integrated in about this many segments."""
 
 
 def _compile(function, *args, **kwargs):
-    """AOT-compile ``function`` for these arguments once per static structure and
-    argument shapes, with jaxrail's compiler options (:mod:`jaxrail._compiler`);
-    returns (compiled, compile time [s], 0 if it was cached)."""
+    """AOT-compile ``function`` (jitted, or a plain function: see
+    :func:`jaxrail._compiler.compile_function`) for these arguments once per static
+    structure and argument shapes; returns (compiled, compile time [s], 0 if it was
+    already compiled in this process)."""
     leaves, structure = jax.tree.flatten((args, kwargs))
     key = (id(function), structure, tuple((x.shape, x.dtype) if eqx.is_array(x) else x
                                       for x in leaves))
     if key in _compiled:
         return _compiled[key], 0.0
     start = time.perf_counter()
-    _compiled[key] = compile_lowered(function.lower(*args, **kwargs))
+    _compiled[key] = compile_function(function, *args, **kwargs)
     return _compiled[key], time.perf_counter() - start
+
+
+class _Timer:
+    """Compiles through :func:`_compile` and adds up the compile seconds."""
+
+    def __init__(self):
+        self.compile_s = 0.0
+
+    def compile(self, function, *args, **kwargs):
+        compiled, seconds = _compile(function, *args, **kwargs)
+        self.compile_s += seconds
+        return compiled
+
+    def run(self, function, *args, **kwargs):
+        return self.compile(function, *args, **kwargs)(*args, **kwargs)
+
+
+def _segment_outputs(n_outputs):
+    """Per segment, the indices of its output times (the last one is its end); the last
+    segment repeats the final output to keep one shape."""
+    per = -(-(n_outputs - 1) // SEGMENTS)
+    return [np.minimum(np.arange(i, i + per), n_outputs - 1)
+            for i in range(1, n_outputs, per)]
+
+
+def _run_in_segments(timer, vehicle, track, params, t1, q0, qdot0, options, limits,
+                     solver, contact_model):
+    """Integrate segment by segment, drawing the progress bar between them; returns the
+    arguments of :func:`_results` after (q0, qdot0, ts)."""
+    ts = np.linspace(0.0, float(t1), options.n_outputs)
+    q = np.full((options.n_outputs, q0.shape[0]), np.nan)
+    qdot = np.full_like(q, np.nan)
+    q[0], qdot[0] = q0, qdot0
+    rest_heights = timer.run(_wheelset_track_coordinates, vehicle, track, q0, qdot0)[3]
+    static = dict(options=options, limits=limits, solver=solver, contact_model=contact_model)
+    result, derailed, counts = diffrax.RESULTS.successful, False, np.zeros(3, dtype=int)
+    t0, dt0, state = 0.0, options.controller()[1], (q0, qdot0)
+    run_segment = None
+    with SimulatedTimeBar(float(t1)) as bar:
+        for indices in _segment_outputs(options.n_outputs):
+            t_end = ts[indices[-1]]
+            args = (vehicle, track, params, *state, rest_heights, jnp.float64(t0),
+                    jnp.float64(t_end), jnp.asarray(ts[indices]), jnp.float64(dt0))
+            if run_segment is None:
+                run_segment = timer.compile(_segment, *args, **static)
+                bar.restart()
+            (q_seg, qdot_seg), result, derailed, *stats = run_segment(*args, **static)
+            q[indices], qdot[indices] = q_seg, qdot_seg
+            counts += np.array([int(x) for x in stats])
+            reached = ts[indices][np.all(np.isfinite(np.asarray(q_seg)), axis=1)]
+            bar.update(float(reached.max(initial=t0)))
+            if not bool(result == diffrax.RESULTS.successful) or bool(derailed):
+                break
+            if counts[0] >= options.max_steps and t_end < ts[-1]:
+                result = diffrax.RESULTS.max_steps_reached
+                break
+            if options.fixed_step is None:  # the next segment starts with this one's mean step
+                dt0 = (t_end - t0) / max(int(stats[1]), 1)
+            t0, state = t_end, (q_seg[-1], qdot_seg[-1])
+    for x in (q, qdot):
+        x[~np.isfinite(x).all(axis=1)] = np.nan
+    return (jnp.asarray(q), jnp.asarray(qdot), result, jnp.asarray(derailed),
+            *(jnp.asarray(c) for c in counts))
 
 
 def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: float,
@@ -308,29 +405,36 @@ def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: f
     ``options.solver()``). ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's
     search, :class:`~jaxrail.vehicles.OnlineContact`).
 
-    The two compiled programs (initial equilibrium, integration) are cached: a second
-    call with the same vehicle structure and options does not recompile, whatever the
-    numbers. Returns a :class:`SimulationResult` with wall and compile times [s].
+    The compiled programs (initial equilibrium, integration, outputs) are cached: a
+    second call with the same vehicle structure and options does not recompile,
+    whatever the numbers; none holds a host callback, so JAX's persistent compilation
+    cache can keep them across processes (:mod:`jaxrail._compiler`). With
+    ``options.progress`` the run is integrated in about :data:`SEGMENTS` segments with
+    the bar drawn between them (each segment starts its step-size controller afresh
+    from the previous segment's mean step). Returns a :class:`SimulationResult` with
+    wall and compile times [s].
     """
     start = time.perf_counter()
     # the default model spelt out, so that None and OnlineContact() share one program
     contact_model = resolve_contact_model(contact_model)
     t1, speed, misalignment = (jnp.float64(x) for x in (t1, speed, misalignment))
     s0 = None if s0 is None else jnp.float64(s0)
-    compile_time = 0.0
+    timer = _Timer()
     if initial is None:
-        initial_args = (vehicle, params, track, speed, misalignment, s0, contact_model)
-        make, seconds = _compile(_initial_jit, *initial_args)
-        compile_time += seconds
-        initial = make(*initial_args)
+        initial = timer.run(initial_state, vehicle, params, track, speed, misalignment, s0,
+                            contact_model)
     initial = tuple(jnp.asarray(x, dtype=jnp.float64) for x in initial)
-    args = (vehicle, track, params, t1, speed, misalignment, s0)
-    kwargs = dict(options=options, limits=limits, initial=initial, solver=solver,
-                  contact_model=contact_model)
-    run, seconds = _compile(_solve_jit, *args, **kwargs)
-    compile_time += seconds
-    result = run(*args, **kwargs)
+    if options.progress:
+        outputs = _run_in_segments(timer, vehicle, track, params, t1, *initial, options,
+                                   limits, solver, contact_model)
+        ts = jnp.linspace(0.0, t1, options.n_outputs)
+        result = timer.run(_results, vehicle, track, params, contact_model, *initial,
+                           ts, *outputs)
+    else:
+        result = timer.run(solve, vehicle, track, params, t1, speed, misalignment, s0,
+                           options=options, limits=limits, initial=initial, solver=solver,
+                           contact_model=contact_model)
     jax.block_until_ready(result)
-    wall = time.perf_counter() - start - compile_time
+    wall = time.perf_counter() - start - timer.compile_s
     return eqx.tree_at(lambda r: (r.wall_time_s, r.compile_time_s), result,
-                       (jnp.asarray(wall), jnp.asarray(compile_time)))
+                       (jnp.asarray(wall), jnp.asarray(timer.compile_s)))

@@ -10,14 +10,13 @@ whole or not at all.
 
 import hashlib
 import json
-import os
 import time
 from pathlib import Path
 
 import jax
 import numpy as np
 
-from .._files import write_atomically
+from .._files import cache_root, write_atomically
 from .search import SearchConfig
 from .table import FIELDS, ContactTable, TableGrid, build_contact_table
 
@@ -26,9 +25,7 @@ TABLE_VERSION = 9  # bump when the table's content changes for the same inputs
 
 def cache_folder() -> Path:
     """The folder of cached tables (not created)."""
-    root = os.environ.get("JAXRAIL_CACHE_DIR")
-    base = Path(root) if root else Path.home() / ".cache" / "jaxrail"
-    return base / "tables"
+    return cache_root() / "tables"
 
 
 def _hash_pytree(digest, tree):

@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from .._compiler import compiler_options
+from .._compiler import compiler_options, use_persistent_cache
 
 
 @dataclasses.dataclass(frozen=True)
@@ -161,6 +161,7 @@ def _compiled(residuals, method, learning_rate, forward_residuals=None):
         return loss_gradient_jacobian(lambda z: forward_residuals(to_values(z), data), z)
 
     options = compiler_options()
+    use_persistent_cache()
     _COMPILED[key] = (optimizer, jax.jit(reverse if forward_residuals is None else forward,
                                          compiler_options=options),
                       jax.jit(residuals_z, compiler_options=options),

@@ -36,7 +36,7 @@ def touching_height(wheel, rail, track, rail_offset, s, config=SearchConfig()):
 def simulate_single_wheelset(wheel, rail, track, rail_offset, speed, lateral, t1,
                              n_outputs=201, contact=None, s0=10.0,
                              config=SearchConfig(), rtol=1e-6, atol=1e-9, max_steps=400_000,
-                             contact_model=None, integrator="tsit5"):
+                             contact_model=None, integrator="tsit5", progress=False):
     """Roll a free wheelset along the track from arc length ``s0`` [m] with
     :func:`jaxrail.simulate.simulate`.
 
@@ -44,7 +44,7 @@ def simulate_single_wheelset(wheel, rail, track, rail_offset, speed, lateral, t1
     at ``speed`` [m/s] and spinning at ``speed / rolling radius`` of the centred contact,
     and runs for ``t1`` [s] with ``n_outputs`` equally spaced outputs, Tsit5 and the PID
     controller (``rtol``, ``atol``). ``contact``: :class:`ContactParameters` (default
-    ones). Returns ``(result, (height, patches))``: the
+    ones). ``progress``: show the progress bar. Returns ``(result, (height, patches))``: the
     :class:`jaxrail.simulate.SimulationResult` and the centred touching height [m] and
     patches.
     """
@@ -59,7 +59,7 @@ def simulate_single_wheelset(wheel, rail, track, rail_offset, speed, lateral, t1
     qdot0 = velocities_from_twists(q0, speed * rotation[:, 0][None, :],
                                    (speed / radius) * rotation[:, 1][None, :])
     options = SolverOptions(rtol=rtol, atol=atol, dt0=1e-4, max_steps=max_steps,
-                            n_outputs=n_outputs, integrator=integrator)
+                            n_outputs=n_outputs, integrator=integrator, progress=progress)
     result = simulate(vehicle, track, params, t1, speed, initial=(q0, qdot0), options=options,
                       contact_model=contact_model)
     return result, (height, patches)
