@@ -424,14 +424,16 @@ def build_parser():
 
 def main(argv=None):
     from ._float64 import enable_float64
+    from ._xla_alarms import hidden_xla_alarms
 
     enable_float64()
     args = build_parser().parse_args(argv)
-    try:
-        return args.run(args)
-    except ValueError as error:
-        print(f"jaxrail {args.command}: error: {error}", file=sys.stderr)
-        return 2
+    with hidden_xla_alarms():
+        try:
+            return args.run(args)
+        except ValueError as error:
+            print(f"jaxrail {args.command}: error: {error}", file=sys.stderr)
+            return 2
 
 
 if __name__ == "__main__":
