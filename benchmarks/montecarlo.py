@@ -1,8 +1,8 @@
 """Throughput of a vmapped Monte Carlo batch against the same runs one after another,
 on 1 and 2 host devices (docs/montecarlo.md).
 
-``python benchmarks/montecarlo.py [--samples 64] [--duration 0.25] [--scenario S]``
-prints JSON: per device count, the compile and run times [s] of the batch (one
+``python benchmarks/montecarlo.py [--samples 64] [--duration 0.25] [--scenario S]
+[--contact online|table]`` prints JSON: per device count, the compile and run times [s] of the batch (one
 compiled call of all samples, sharded over the devices) and of the sequential loop
 (the unbatched simulation compiled once, then called per sample), the throughputs in
 simulated seconds per wall second, their ratio, and the largest difference between
@@ -23,7 +23,7 @@ import time
 from jaxrail._devices import host_device_environment
 
 
-def measure(scenario_name, samples, duration, seed, device_counts, sequential):
+def measure(scenario_name, samples, duration, seed, device_counts, sequential, contact):
     import jax
     import numpy as np
 
@@ -40,10 +40,11 @@ def measure(scenario_name, samples, duration, seed, device_counts, sequential):
     drawn = draw([parse_variation(f"speed={0.8 * scenario.speed}:{1.2 * scenario.speed}"),
                   parse_variation("misalignment=0:4e-3")], samples, seed=seed)
     options = scenario.solver_options(duration=duration)
+    model = scenario.contact_model(vehicle, contact)
     report = {"host_devices": len(jax.devices()), "batches": []}
     if sequential:
         one = jax.jit(lambda v, m: solve(vehicle, track, params, duration, v, m,
-                                         options=options))
+                                         options=options, contact_model=model))
         start = time.perf_counter()
         one = one.lower(drawn["speed"][0], drawn["misalignment"][0]).compile()
         report["sequential_compile_s"] = time.perf_counter() - start
@@ -55,7 +56,7 @@ def measure(scenario_name, samples, duration, seed, device_counts, sequential):
         report["sequential_lateral"] = np.stack(lateral).tolist()
     for k in device_counts:
         batch = run_samples(scenario, drawn, duration=duration, chunk=samples, built=built,
-                            keep_results=True, devices=jax.devices()[:k])
+                            keep_results=True, devices=jax.devices()[:k], contact=contact)
         report["batches"].append({
             "devices": k, "statuses": batch.statuses, "compile_s": batch.compile_time_s,
             "run_s": batch.run_time_s, "lateral": batch.results.wheelset_lateral.tolist()})
@@ -68,7 +69,8 @@ def child(args, env, device_counts, sequential):
     """One configuration in a child process with environment ``env``."""
     command = [sys.executable, __file__, "--child", "--scenario", args.scenario,
                "--samples", str(args.samples), "--duration", str(args.duration),
-               "--seed", str(args.seed), "--devices", *map(str, device_counts)]
+               "--seed", str(args.seed), "--contact", args.contact,
+               "--devices", *map(str, device_counts)]
     out = subprocess.run(command + (["--sequential"] if sequential else []), env=env,
                          stdout=subprocess.PIPE, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -80,6 +82,8 @@ def main():
     parser.add_argument("--samples", type=int, default=64)
     parser.add_argument("--duration", type=float, default=0.25, help="[s] per sample")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--contact", choices=("online", "table"), default="online",
+                        help="the paper's search or the contact table")
     parser.add_argument("--devices", type=int, nargs="*", default=[1, 2],
                         help="device counts to run the batch on (at most 2)")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
@@ -87,7 +91,7 @@ def main():
     args = parser.parse_args()
     if args.child:
         print(json.dumps(measure(args.scenario, args.samples, args.duration, args.seed,
-                                 args.devices, args.sequential)))
+                                 args.devices, args.sequential, args.contact)))
         return
     import numpy as np
 
@@ -100,7 +104,7 @@ def main():
     simulated = args.samples * args.duration
     sequential = np.array(plain["sequential_lateral"])
     report = {"benchmark": "montecarlo", "cores": os.cpu_count(), "scenario": args.scenario,
-              "samples": args.samples, "duration_s": args.duration,
+              "contact": args.contact, "samples": args.samples, "duration_s": args.duration,
               "sequential_compile_s": plain["sequential_compile_s"],
               "sequential_run_s": plain["sequential_run_s"],
               "sequential_throughput": simulated / plain["sequential_run_s"], "batches": []}

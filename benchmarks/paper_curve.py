@@ -8,7 +8,12 @@ time, simulated time, real-time factor, steps accepted and rejected, right-hand-
 evaluations (Tsit5: 6 per attempted step; IMEX: 8 and one Jacobian of the wheel-rail
 loads), status; for every run after the first of a profile and contact model, its
 largest differences from that first run (leading wheelset lateral displacement [mm],
-outer wheel's normal force [% of its largest]). With ``--save DIR`` it also keeps each run (``DIR/<scenario>.pkl``, the
+outer wheel's normal force [% of its largest], also outside impacts (from 0.05 s before
+to 0.25 s after a patch steeper than 0.3 rad appears on that wheel),
+and the intervals with two patches on a wheel of the leading wheelset). Compile times:
+cold (the runs use a new, empty persistent compilation cache) and cached (the same
+programs in a new process that finds them in that cache: ``cached_compile_time_s``,
+from a run of 1 ms with the same options). With ``--save DIR`` it also keeps each run (``DIR/<scenario>.pkl``, the
 SimulationResult as numpy arrays, for experiments/paper_curve/figures.py), its results
 file (``.h5``) and summary (``.json``).
 Usage: ``python benchmarks/paper_curve.py [--duration 41] [--save DIR]
@@ -22,6 +27,9 @@ import json
 import os
 import pickle
 import platform
+import subprocess
+import sys
+import tempfile
 from pathlib import Path
 
 import jax
@@ -32,10 +40,14 @@ from jaxrail import enable_float64
 enable_float64()
 
 from jaxrail._files import write_atomically  # noqa: E402
+from jaxrail.results import summarize  # noqa: E402
 from jaxrail.scenarios import load_scenario, run_scenario  # noqa: E402
+from jaxrail.simulate import simulate  # noqa: E402
 
 STAGES = {"tsit5": 6, "imex": 8}
 OUTER = 1  # the right wheel is the outer one in the paper's left curve
+IMPACT_ANGLE = 0.3  # [rad] a patch steeper than this is off the tread (tread: < 0.1 rad)
+IMPACT = (0.05, 0.25)  # [s] before and after such a patch appears: the impact's transient
 
 
 def main():
@@ -49,7 +61,14 @@ def main():
     parser.add_argument("--integrators", nargs="+", default=["tsit5", "imex"],
                         choices=("tsit5", "imex"))
     parser.add_argument("--progress", action="store_true")
+    parser.add_argument("--cached-child", nargs=3, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.cached_child:
+        print(json.dumps(_compile_only(*args.cached_child, args.duration)))
+        return
+    cache = os.environ.get("JAX_COMPILATION_CACHE_DIR") or tempfile.mkdtemp(prefix="xla-")
+    os.environ["JAX_COMPILATION_CACHE_DIR"] = cache
+    jax.config.update("jax_compilation_cache_dir", cache)
     runs = []
     for name in args.scenarios:
         for contact in args.contacts:
@@ -59,6 +78,8 @@ def main():
                 result, vehicle, params, _ = run_scenario(scenario, args.duration,
                                                           args.progress, contact=contact)
                 runs.append(_report(name, scenario, contact, integrator, result, first))
+                runs[-1]["cached_compile_time_s"] = _cached_compile(name, contact, integrator,
+                                                                   args.duration)
                 print(json.dumps(runs[-1]), flush=True)
                 first = result if first is None else first
                 if args.save is not None:
@@ -67,6 +88,26 @@ def main():
     print(json.dumps({"benchmark": "paper_curve", "runs": runs,
                       "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
                                   "load": os.getloadavg()}}, indent=2))
+
+
+def _compile_only(name, contact, integrator, duration):
+    """compile_time_s of a 1 ms run with the options of a ``duration`` run."""
+    scenario = dataclasses.replace(load_scenario(name), integrator=integrator)
+    vehicle, params, track = scenario.build()
+    duration = scenario.duration if duration is None else duration
+    result = simulate(vehicle, track, params, 1e-3, scenario.speed, scenario.misalignment,
+                      options=scenario.solver_options(duration),
+                      contact_model=scenario.contact_model(vehicle, contact))
+    return {"compile_time_s": float(result.compile_time_s), "status": result.status}
+
+
+def _cached_compile(name, contact, integrator, duration):
+    """Compile time [s] of the same programs in a new process (the cache filled)."""
+    command = [sys.executable, __file__, "--cached-child", name, contact, integrator]
+    if duration is not None:
+        command += ["--duration", str(duration)]
+    out = subprocess.run(command, stdout=subprocess.PIPE, text=True, check=True)
+    return round(json.loads(out.stdout.strip().splitlines()[-1])["compile_time_s"], 1)
 
 
 def _outer_force(result):
@@ -94,19 +135,57 @@ def _report(name, scenario, contact, integrator, result, reference):
         valid = np.asarray(result.valid) & np.asarray(reference.valid)
         lateral = [np.asarray(r.wheelset_lateral)[valid, 0] for r in (reference, result)]
         force = [_outer_force(r)[valid] for r in (reference, result)]
+        t = np.asarray(result.t)[valid]
+        onsets = sorted(set(_flange_onsets(reference, valid)) | set(_flange_onsets(result, valid)))
+        calm = np.ones_like(t, dtype=bool)
+        for onset in onsets:
+            calm &= ~((t > onset - IMPACT[0]) & (t < onset + IMPACT[1]))
+        difference = 100 * np.abs(force[1] - force[0]) / np.max(force[0])
+        intervals = [_two_patch_intervals(r) for r in (reference, result)]
         report["vs_first"] = {
             "max_leading_lateral_difference_mm": float(1e3 * np.max(np.abs(
                 lateral[1] - lateral[0]))),
-            "max_outer_normal_force_difference_percent": float(
-                100 * np.max(np.abs(force[1] - force[0])) / np.max(force[0])),
+            "max_outer_normal_force_difference_percent": float(np.max(difference)),
+            "outer_flange_onsets_s": onsets,
+            "max_outer_normal_force_difference_outside_onsets_percent": float(
+                np.max(difference[calm])),
             "outer_max_normal_force_N": [float(np.max(f)) for f in force],
+            "leading_two_patch_intervals_s": intervals,
+            "max_two_patch_interval_end_difference_s": _interval_difference(*intervals),
         }
     return report
 
 
+def _flange_onsets(result, valid):
+    """Times [s] at which the leading wheelset's outer wheel comes onto its flange root
+    or flange (a patch steeper than ``IMPACT_ANGLE`` appears): impacts."""
+    active = np.asarray(result.wheels.active, dtype=bool)[valid, 0, OUTER]
+    angle = np.abs(np.asarray(result.wheels.contact_angle))[valid, 0, OUTER]
+    flange = np.any(active & (angle > IMPACT_ANGLE), axis=-1)
+    t = np.asarray(result.t)[valid]
+    return [float(t[k]) for k in np.flatnonzero(flange[1:] & ~flange[:-1]) + 1]
+
+
+def _two_patch_intervals(result):
+    """The leading wheelset's wheels' intervals [s] with two or more patches."""
+    wheels = summarize(result)["wheels"]
+    return {w["side"]: w["multi_patch_intervals_s"] for w in wheels if w["wheelset"] == 1}
+
+
+def _interval_difference(first, second):
+    """Largest difference [s] of the interval ends, wheel by wheel, when both runs have
+    the same number of intervals on each wheel (else None)."""
+    ends = []
+    for side in first:
+        if len(first[side]) != len(second[side]):
+            return None
+        ends += [abs(a - b) for x, y in zip(first[side], second[side]) for a, b in zip(x, y)]
+    return max(ends, default=0.0)
+
+
 def _save(directory, name, scenario, result, vehicle, params):
     from jaxrail import __version__
-    from jaxrail.results import summarize, write_results
+    from jaxrail.results import write_results
 
     directory.mkdir(parents=True, exist_ok=True)
     host = jax.tree.map(np.asarray, result)

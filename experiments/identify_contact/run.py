@@ -11,9 +11,12 @@ from initial guesses 30 % off, on noise-free and on noisy measurements.
 vmapped loss (three misalignments, 0.2 s) equals the sum of the members' gradients.
 Both write JSON into the directory OUT (``fit`` also the measurements CSV files and a
 figure per fit; ``--only noise_free|noisy`` runs one of the two fits).
+``--integrator imex --fixed-step 1e-3`` replaces the scenario's solver (Tsit5, 0.5 ms)
+for truth, gradients and fits alike.
 """
 
 import argparse
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -51,6 +54,12 @@ OFF_GRADIENT = {"contact_stiffness": 1.3, "friction": 0.7, "restitution": 0.9,
                 "primary_lateral_stiffness": 1.2, "primary_vertical_damping": 0.8}
 OFF = np.array([1.3, 0.7])  # initial guesses: stiffness 30 % high, friction 30 % low
 SEED = 2026
+SOLVER = {}  # scenario solver overrides from the command line (integrator, fixed_step)
+
+
+def scenario_of_study():
+    """The study's scenario with the command line's solver overrides."""
+    return dataclasses.replace(load_scenario(SCENARIO), **SOLVER)
 
 
 def truth(scenario):
@@ -69,7 +78,7 @@ def truth(scenario):
 
 
 def gradient_check(out: Path, steps=(1e-4, 1e-5, 1e-6), names=GRADIENT, mode="reverse"):
-    scenario = load_scenario(SCENARIO)
+    scenario = scenario_of_study()
     built, measured = truth(scenario)
     vehicle, params, track = built
     common = dict(speed=scenario.speed, misalignment=scenario.misalignment,
@@ -135,7 +144,7 @@ def noisy_measurements(clean, seed):
 def fits(out: Path, which=("noise_free", "noisy"), max_iterations=15, seeds=(SEED,)):
     """The noise-free fit and one noisy fit per seed (labelled ``noisy`` for the study's
     seed, ``noisy_seed<N>`` for others)."""
-    scenario = load_scenario(SCENARIO)
+    scenario = scenario_of_study()
     built, clean = truth(scenario)
     truth_values = np.asarray(get_values(built[0], built[1], FIT))
     initial = dict(zip(FIT, truth_values * OFF))
@@ -172,7 +181,7 @@ def fits(out: Path, which=("noise_free", "noisy"), max_iterations=15, seeds=(SEE
 def batch_check(out: Path, misalignments=(1e-3, 2e-3, 3e-3), duration=0.2):
     """grad of a vmapped loss (one member per initial misalignment, the parameters
     shared) against the sum of the members' gradients, through the whole simulation."""
-    scenario = load_scenario(SCENARIO)
+    scenario = scenario_of_study()
     vehicle, params, track = scenario.build()
     options = scenario.solver_options(duration=duration)
 
@@ -219,7 +228,12 @@ def main():
                         help="gradient: relative steps of the differences")
     parser.add_argument("--mode", choices=("reverse", "forward"), default="reverse",
                         help="gradient: by reverse mode or by forward mode (J^T r)")
+    parser.add_argument("--integrator", choices=("tsit5", "imex"),
+                        help="replace the scenario's integrator")
+    parser.add_argument("--fixed-step", type=float, help="replace the scenario's step [s]")
     args = parser.parse_args()
+    SOLVER.update({k: v for k, v in (("integrator", args.integrator),
+                                     ("fixed_step", args.fixed_step)) if v is not None})
     args.out.mkdir(parents=True, exist_ok=True)
     if args.what == "gradient":
         gradient_check(args.out, tuple(float(h) for h in args.steps.split(",")),
