@@ -22,7 +22,9 @@ when that is set (or wherever ``jax_compilation_cache_dir`` already points), els
 ``~/.cache/jaxrail/xla`` (``$JAXRAIL_CACHE_DIR/xla``). ``JAXRAIL_COMPILATION_CACHE=off``
 (or JAX's own ``JAX_ENABLE_COMPILATION_CACHE=false``) leaves it off. The cache is
 keyed by the program, the compiler options, the jax version and the machine; JAX
-keeps only programs that took over a second to compile. JAX does not keep programs
+keeps only programs that took over a second to compile. The traced programs are kept
+too, in ``<cache>/programs`` (:mod:`jaxrail._program_cache`), so that a second process
+skips tracing as well; the same switch turns both off. JAX does not keep programs
 that call back to Python, so jaxrail's programs are traced with equinox's runtime
 checks (``eqx.error_if``, e.g. diffrax's checks of its inputs) returning NaN instead
 of raising through a callback: a run that fails them ends with a non-finite state
