@@ -18,10 +18,10 @@ from jaxrail.vehicles import simulate_single_wheelset
 T1 = 0.5
 
 
-def _run(progress):
+def _run(progress, lateral=2e-3):
     rail = uic60()
     return simulate_single_wheelset(conical_wheel(0.05), rail, straight_track(30.0),
-                                    rail_offset(rail), 5.0, 2e-3, T1, n_outputs=101,
+                                    rail_offset(rail), 5.0, lateral, T1, n_outputs=101,
                                     progress=progress)[0]
 
 
@@ -38,6 +38,14 @@ def test_segments_give_the_one_piece_answer(runs):
     np.testing.assert_allclose(segmented.wheelset_lateral, whole.wheelset_lateral, atol=1e-8)
     np.testing.assert_allclose(segmented.q, whole.q, atol=1e-7)
     assert abs(int(segmented.accepted_steps) / int(whole.accepted_steps) - 1.0) < 0.1
+
+
+def test_a_derailment_stops_the_segments_and_keeps_the_start():
+    result = _run(True, lateral=0.04)  # beyond the 35 mm limit: derailed at once
+    assert result.status == "derailed"
+    valid = np.asarray(result.valid)
+    assert valid[0] and not valid[-1] and result.simulated_time_s < T1 / 2
+    assert np.all(np.isnan(np.asarray(result.wheelset_lateral)[~valid]))
 
 
 def test_bar_counts_simulated_seconds_and_shows_the_real_time_factor(capfd):
