@@ -277,7 +277,7 @@ def _start(vehicle, track, params, speed, misalignment, s0, initial, model):
 
 def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignment=0.0,
           s0=None, options: SolverOptions = SolverOptions(),
-          limits: DerailmentLimits = DerailmentLimits(), solver=None, adjoint=None,
+          limits: DerailmentLimits | None = None, solver=None, adjoint=None,
           initial=None, contact_model=None):
     """The traceable core of :func:`simulate` (jit, vmap and grad it): returns a
     :class:`SimulationResult` without host timings. ``t1`` [s], ``speed`` [m/s] and
@@ -285,7 +285,9 @@ def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignmen
     instead of the static equilibrium (:func:`jaxrail.vehicles.initial_state`); wheel
     lifts and vertical displacements are measured from the initial state.
     ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's search).
-    ``options.progress`` is not used here (:func:`simulate` draws the bar)."""
+    ``options.progress`` is not used here (:func:`simulate` draws the bar). ``limits``:
+    :class:`DerailmentLimits` (default ones)."""
+    limits = DerailmentLimits() if limits is None else limits
     loads = VehicleLoads(vehicle, params.contact, track, resolve_contact_model(contact_model))
     q0, qdot0 = _start(vehicle, track, params, speed, misalignment, s0, initial, loads.model)
     _, _, _, rest_heights = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
@@ -397,7 +399,7 @@ def _run_in_segments(timer, vehicle, track, params, t1, q0, qdot0, options, limi
 
 def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: float,
              misalignment: float = 0.0, s0=None, options: SolverOptions = SolverOptions(),
-             limits: DerailmentLimits = DerailmentLimits(), initial=None,
+             limits: DerailmentLimits | None = None, initial=None,
              solver=None, contact_model=None) -> SimulationResult:
     """Run a vehicle along a track for ``t1`` [s] at ``speed`` [m/s] from static
     equilibrium, shifted ``misalignment`` [m] to the left (or from ``initial`` =
@@ -415,6 +417,7 @@ def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: f
     wall and compile times [s].
     """
     start = time.perf_counter()
+    limits = DerailmentLimits() if limits is None else limits
     # the default model spelt out, so that None and OnlineContact() share one program
     contact_model = resolve_contact_model(contact_model)
     t1, speed, misalignment = (jnp.float64(x) for x in (t1, speed, misalignment))

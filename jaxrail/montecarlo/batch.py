@@ -39,10 +39,11 @@ AXIS = "batch"
 
 def batched_solve(vehicle, track, params, contact, values, speed, misalignment, *, names,
                   duration, options: SolverOptions,
-                  limits: DerailmentLimits = DerailmentLimits()):
+                  limits: DerailmentLimits | None = None):
     """:func:`jaxrail.simulate.solve` of every sample: ``values`` (B, len(names)) of the
     named parameters, ``speed`` (B,) [m/s], ``misalignment`` (B,) [m]; everything else
-    shared, ``contact`` the contact model (:mod:`jaxrail.vehicles.loads`). Returns a
+    shared, ``contact`` the contact model (:mod:`jaxrail.vehicles.loads`), ``limits``
+    the :class:`~jaxrail.simulate.DerailmentLimits` (default ones). Returns a
     SimulationResult with a leading batch axis B."""
     def one(v, s, m):
         p = set_values(vehicle, params, names, v) if names else params

@@ -1,1 +1,1 @@
-"""Figures (matplotlib, Agg backend)."""
+"""Figures (matplotlib figures without pyplot: no backend is selected, :mod:`._figure`)."""

@@ -8,15 +8,11 @@ at all. Wheelset indices count from 0 = leading (labelled 1 in the figures); whe
 left, 1 = right (the outer wheel of a left curve).
 """
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..results import derailment_ratio, nadal_limit  # noqa: E402
-from .profiles import save_figure  # noqa: E402
+from ._figure import subplots
+from ..results import derailment_ratio, nadal_limit
+from .profiles import save_figure
 
 SIDES = ("left", "right")
 DPI = 90
@@ -38,7 +34,7 @@ def _check(results, wheelset=0, wheel=None):
 
 
 def _panels(n, rows=1, width=4.6, height=3.4, sharey=True):
-    fig, axes = plt.subplots(rows, n, figsize=(width * n, height * rows), dpi=DPI,
+    fig, axes = subplots(rows, n, figsize=(width * n, height * rows), dpi=DPI,
                              sharey=sharey, squeeze=False)
     return fig, axes
 
@@ -112,7 +108,7 @@ def plot_forces(results, path, wheelset=0):
     rows = (("normal_force", "normal force [kN]"),
             ("creep_force_x", "longitudinal creep force [kN]"),
             ("creep_force_y", "lateral creep force [kN]"))
-    fig, axes = plt.subplots(3, len(results), figsize=(4.6 * len(results), 7.5), dpi=DPI,
+    fig, axes = subplots(3, len(results), figsize=(4.6 * len(results), 7.5), dpi=DPI,
                              sharex="col", sharey="row", squeeze=False)
     styles = ("-", "--", ":", "-.")
     for c, (label, r) in enumerate(results.items()):

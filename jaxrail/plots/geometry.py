@@ -2,14 +2,12 @@
 point map (mm, track frame)."""
 
 import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..contact.search import HALF_TAPING_DISTANCE  # noqa: E402
-from ..profiles import sample_profile  # noqa: E402
-from .profiles import rail_name, save_figure  # noqa: E402
+from ._figure import subplots
+from ..contact.search import HALF_TAPING_DISTANCE
+from ..profiles import sample_profile
+from .profiles import rail_name, save_figure
 
 _MAP_LIFT = 6.0  # [mm] clearance drawn between the flange tip and the rail top
 
@@ -32,7 +30,7 @@ def plot_geometry(report, wheel, rail, rail_offset_mm, path, title=None):
     """
     rows = report["rows"]
     shift = np.array([r["shift_mm"] for r in rows])
-    fig, (ax_dr, ax_angle, ax_map) = plt.subplots(
+    fig, (ax_dr, ax_angle, ax_map) = subplots(
         3, 1, figsize=(6.5, 8.6), dpi=90, gridspec_kw={"height_ratios": [1.0, 1.0, 1.5]})
 
     ax_dr.plot(shift, [r["delta_r_mm"] for r in rows], color="C0", lw=1.4)
@@ -56,7 +54,7 @@ def plot_geometry(report, wheel, rail, rail_offset_mm, path, title=None):
     for k, (y_wheel, f_wheel) in enumerate(curves):
         ax_map.plot(taping + y_wheel, lift - f_wheel, color="C1", lw=1.4,
                     label=getattr(wheel, "name", "wheel") if k == 0 else None)
-    colours = plt.get_cmap("viridis")((shift - shift.min()) / max(np.ptp(shift), 1e-12))
+    colours = matplotlib.colormaps["viridis"]((shift - shift.min()) / max(np.ptp(shift), 1e-12))
     nominal_mm = 1e3 * float(wheel.nominal_radius)
     for row, colour in zip(rows, colours):
         for p in row["left"]:
@@ -64,8 +62,8 @@ def plot_geometry(report, wheel, rail, rail_offset_mm, path, title=None):
             rail_z = np.interp(p["y_track_mm"] - rail_offset_mm, y_rail, z_rail)
             ax_map.plot([taping + p["y_wheel_mm"], p["y_track_mm"]], [wheel_z, rail_z],
                         color=colour, lw=0.7, marker=".", ms=3)
-    mappable = plt.cm.ScalarMappable(cmap="viridis",
-                                     norm=plt.Normalize(shift.min(), shift.max()))
+    mappable = matplotlib.cm.ScalarMappable(
+        cmap="viridis", norm=matplotlib.colors.Normalize(shift.min(), shift.max()))
     fig.colorbar(mappable, ax=ax_map, label="shift [mm]", fraction=0.04, pad=0.02)
     ax_map.set_xlabel("lateral position from the track centre (wheelset centred) [mm]")
     ax_map.set_ylabel("height [mm] (wheel lifted)")

@@ -2,15 +2,11 @@
 parameter's trajectory relative to its initial value (and to a known truth, for
 synthetic studies), and every measured channel against the fitted simulation."""
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..identify.measurements import UNITS  # noqa: E402
-from .profiles import save_figure  # noqa: E402
+from ._figure import subplots
+from ..identify.measurements import UNITS
+from .profiles import save_figure
 
 
 def _unit(channel):
@@ -22,7 +18,7 @@ def plot_identification(identification, path, truth=None):
     (PNG). ``truth``: optional {name: value} drawn as dashed lines."""
     fit, measured = identification.fit, identification.measurements
     channels = measured.channels
-    fig, axes = plt.subplots(1 + (len(channels) + 1) // 2, 2, figsize=(10.0, 3.0 * (
+    fig, axes = subplots(1 + (len(channels) + 1) // 2, 2, figsize=(10.0, 3.0 * (
         1 + (len(channels) + 1) // 2)), squeeze=False, dpi=90)
     iterations = np.arange(len(fit.loss_history))
     axes[0, 0].semilogy(iterations, np.maximum(fit.loss_history, 1e-300), "o-", ms=3)

@@ -9,14 +9,10 @@ successfully are drawn as crosses and left out of the contours.
 
 import re
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from .profiles import save_figure  # noqa: E402
+from ._figure import subplots
+from .profiles import save_figure
 
 # (title, unit, function of the table -> one value per sample)
 QUANTITIES = {
@@ -63,7 +59,7 @@ def _axis(table, name):
 def _panels(height):
     """A figure with one panel per quantity, four to a row (unused panels hidden)."""
     rows = -(-len(QUANTITIES) // 4)
-    fig, axes = plt.subplots(rows, 4, figsize=(18.0, height * rows / 2), dpi=90)
+    fig, axes = subplots(rows, 4, figsize=(18.0, height * rows / 2), dpi=90)
     for ax in axes.flat[len(QUANTITIES):]:
         ax.set_visible(False)
     return fig, axes

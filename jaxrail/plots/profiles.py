@@ -1,15 +1,12 @@
 """Plot a wheel on its rail, as they sit on straight track (mm, track frame)."""
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from .._files import write_atomically  # noqa: E402
-from ..contact.search import HALF_TAPING_DISTANCE  # noqa: E402
-from ..profiles import sample_profile  # noqa: E402
-from ..profiles.measures import rail_offset  # noqa: E402
+from ._figure import subplots
+from .._files import write_atomically
+from ..contact.search import HALF_TAPING_DISTANCE
+from ..profiles import sample_profile
+from ..profiles.measures import rail_offset
 
 
 def plot_wheel_on_rail(wheel, rail, path, gauge=1.435, title=None):
@@ -18,7 +15,7 @@ def plot_wheel_on_rail(wheel, rail, path, gauge=1.435, title=None):
     profile origin; the wheel is drawn at its taping line 750 mm from the centre and
     lowered onto the rail top."""
     offset_mm = 1e3 * float(rail_offset(rail, gauge))
-    fig, ax = plt.subplots(figsize=(7.0, 4.0), dpi=90)
+    fig, ax = subplots(figsize=(7.0, 4.0), dpi=90)
     y_rail, z_rail = sample_profile(rail, n=801)
     ax.plot(offset_mm + y_rail, z_rail, color="0.3", lw=1.5, label=rail_name(rail))
     ax.fill_between(offset_mm + y_rail, z_rail, z_rail.min() - 5.0, color="0.85")
@@ -48,9 +45,6 @@ def rail_name(rail):
 
 
 def save_figure(fig, path):
-    """Save ``fig`` as PNG to ``path`` whole or not at all, and close it."""
-    try:
-        write_atomically(path, lambda temporary: fig.savefig(temporary, format="png",
-                                                             bbox_inches="tight"))
-    finally:
-        plt.close(fig)
+    """Save ``fig`` as PNG to ``path`` whole or not at all."""
+    write_atomically(path, lambda temporary: fig.savefig(temporary, format="png",
+                                                         bbox_inches="tight"))

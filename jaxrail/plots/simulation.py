@@ -1,13 +1,9 @@
 """Figures of a simulation result: wheelset lateral displacements and wheel loads."""
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from .profiles import save_figure  # noqa: E402
+from ._figure import subplots
+from .profiles import save_figure
 
 SIDES = ("left", "right")
 
@@ -19,7 +15,7 @@ def plot_wheelsets(result, path, title=""):
     t = np.asarray(result.t)[valid]
     lateral = 1e3 * np.asarray(result.wheelset_lateral)[valid]
     load = 1e-3 * np.asarray(result.wheels.vertical_force)[valid]
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    fig, (top, bottom) = subplots(2, 1, figsize=(8, 6), sharex=True)
     for w in range(lateral.shape[1]):
         top.plot(t, lateral[:, w], label=f"wheelset {w + 1}")
         for s, style in zip(range(2), ("-", "--")):

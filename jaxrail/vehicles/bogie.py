@@ -29,7 +29,7 @@ def bogie_frame_mass(values: dict) -> float:
 
 
 def bogie(wheel=None, rail=None, values=None, config=SearchConfig(),
-          contact=ContactParameters()) -> tuple[Vehicle, VehicleParams]:
+          contact=None) -> tuple[Vehicle, VehicleParams]:
     """The loaded bogie as ``(Vehicle, VehicleParams)``; arguments as
     :func:`jaxrail.vehicles.trailer`. Force elements ``primary_k_left``/``_right``
     (k = 1 leading, 2)."""
@@ -51,4 +51,5 @@ def bogie(wheel=None, rail=None, values=None, config=SearchConfig(),
                                          gravity=(0.0, 0.0, -GRAVITY))
     vehicle = Vehicle("bogie", system, (3, 4), np.array(layout + unsprung_layout), wheel, rail,
                       float(profile_rail_offset(rail)), config, axleboxes=(1, 2))
-    return vehicle, VehicleParams(system_params, contact)
+    return vehicle, VehicleParams(system_params,
+                                  ContactParameters() if contact is None else contact)

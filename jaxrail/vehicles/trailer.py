@@ -144,13 +144,14 @@ def primary_bushings(values: dict, k: int, frame: str, x: float, preload: float)
 
 
 def trailer(wheel=None, rail=None, values=None, config=SearchConfig(),
-            contact=ContactParameters()) -> tuple[Vehicle, VehicleParams]:
+            contact=None) -> tuple[Vehicle, VehicleParams]:
     """The 11-body trailer as ``(Vehicle, VehicleParams)``.
 
     Arguments:
         wheel, rail: profiles (default S1002 with the data's nominal radius on UIC60 1:40).
         values: :func:`trailer_values` (default the built-in Manchester file).
-        config: contact search settings; contact: :class:`ContactParameters`.
+        config: contact search settings; contact: :class:`ContactParameters` (default
+            ones).
     """
     v = trailer_values() if values is None else values
     r0 = v["wheelset.nominal_radius"]
@@ -194,4 +195,5 @@ def trailer(wheel=None, rail=None, values=None, config=SearchConfig(),
     offset = float(profile_rail_offset(rail))
     vehicle = Vehicle("trailer", system, tuple(range(7, 11)), np.array(layout), wheel, rail,
                       offset, config, axleboxes=tuple(range(3, 7)))
-    return vehicle, VehicleParams(system_params, contact)
+    return vehicle, VehicleParams(system_params,
+                                  ContactParameters() if contact is None else contact)
