@@ -62,8 +62,9 @@ def pool_threads() -> int:
     return int(value) if value.strip().isdigit() else (os.cpu_count() or 1)
 
 
-def devices_may_stall(devices) -> bool:
-    """True when ``devices`` are several CPU devices whose programs can take every
-    thread of the shared pool (see the module docstring)."""
-    cpu = [d for d in devices if d.platform == "cpu"]
+def devices_may_stall(devices, process_index: int = 0) -> bool:
+    """True when ``devices`` hold several CPU devices of process ``process_index``
+    (only those share its pool) whose programs can take every thread of the shared
+    pool (see the module docstring)."""
+    cpu = [d for d in devices if d.platform == "cpu" and d.process_index == process_index]
     return len(cpu) > 1 and pool_threads() <= len(cpu)

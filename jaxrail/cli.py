@@ -269,7 +269,8 @@ def _montecarlo_command(args):
                 stats.setdefault("successful_samples", {})[key] = {
                     "min": float(good.min()), "median": float(np.median(good)),
                     "max": float(good.max())}
-    _emit_json(stats, args.summary)
+    if jax.process_index() == 0:  # every process has the whole table; one writes
+        _emit_json(stats, args.summary)
     return 0 if np.all(ok) else 1
 
 

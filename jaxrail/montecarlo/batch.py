@@ -118,7 +118,7 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
     cache): a second study of the same vehicle does not recompile. Returns (compile
     time [s], 0 if cached; run time [s]; the chunk used, :func:`chunk_size`)."""
     devices = tuple(jax.devices() if devices is None else devices)
-    if devices_may_stall(devices):
+    if devices_may_stall(devices, jax.process_index()):
         warnings.warn(f"{len(devices)} CPU devices share XLA's thread pool of "
                       f"{pool_threads()} threads: a chunk may run its parts one after the "
                       "other or hang; start the process with jaxrail.use_host_devices(N) "

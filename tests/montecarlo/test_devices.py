@@ -41,9 +41,12 @@ def test_too_late_once_jax_has_started():
 
 
 def test_devices_that_can_take_the_whole_pool_are_flagged(monkeypatch):
-    cpus = [SimpleNamespace(platform="cpu")] * 2
+    cpus = [SimpleNamespace(platform="cpu", process_index=0)] * 2
     monkeypatch.setenv(POOL_THREADS, "2")
     assert devices_may_stall(cpus) and not devices_may_stall(cpus[:1])
+    # two processes with one device each: each pool serves one device
+    spread = [SimpleNamespace(platform="cpu", process_index=k) for k in (0, 1)]
+    assert not devices_may_stall(spread, 0) and not devices_may_stall(spread, 1)
     monkeypatch.setenv(POOL_THREADS, host_device_environment(2, {})[POOL_THREADS])
     assert not devices_may_stall(cpus)
 

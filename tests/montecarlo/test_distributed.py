@@ -1,0 +1,83 @@
+"""Monte Carlo across processes for real: `jaxrail montecarlo --distributed` in two
+local processes (a local coordinator, one CPU device each) gives the table of the same
+samples run in one process, and only process 0 writes the files."""
+
+import csv
+import socket
+import subprocess
+import sys
+
+import numpy as np
+
+SCENARIO = """
+name = "wheelset-straight"
+description = "a free S1002 wheelset on straight UIC60 1:40 track"
+[vehicle]
+model = "single-wheelset"
+wheel = "s1002"
+rail = "uic60"
+inclination = "1:40"
+[track]
+segments = [{ kind = "straight", length = 60.0 }]
+[run]
+speed = 10.0
+misalignment = 0.002
+duration = 0.05
+[solver]
+output_rate = 200.0
+"""
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("localhost", 0))
+        return s.getsockname()[1]
+
+
+def _command(scenario, where, *extra):
+    return [sys.executable, "-m", "jaxrail.cli", "montecarlo", str(scenario), "--samples",
+            "4", "--vary", "speed=8:12", "--vary", "misalignment=0:0.003", "--quiet",
+            "--out", str(where / "table.csv"), "--summary", str(where / "summary.json"),
+            *extra]
+
+
+def _rows(path):
+    with open(path) as stream:
+        return list(csv.DictReader(stream))
+
+
+def test_two_processes_give_the_one_process_table(tmp_path):
+    scenario = tmp_path / "wheelset.toml"
+    scenario.write_text(SCENARIO)
+    (tmp_path / "one").mkdir()
+    (tmp_path / "two").mkdir()
+    coordinator = f"localhost:{_free_port()}"
+    runs = [subprocess.Popen(_command(scenario, tmp_path / "two", "--distributed",
+                                      "--coordinator", coordinator, "--num-processes", "2",
+                                      "--process-id", str(k)),
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            for k in (0, 1)]
+    runs.append(subprocess.Popen(_command(scenario, tmp_path / "one"),
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True))
+    outputs = []
+    try:
+        for run in runs:
+            outputs.append(run.communicate(timeout=600))
+    finally:
+        for run in runs:
+            run.kill()
+    for run, (_, err) in zip(runs, outputs):
+        assert run.returncode == 0, err[-2000:]
+    first, second, single = (err for _, err in outputs)
+    assert "on 2 device(s)" in first and "on 1 device(s)" in single
+    assert "wrote" in first and "wrote" not in second  # process 0 writes, once
+    two, one = _rows(tmp_path / "two" / "table.csv"), _rows(tmp_path / "one" / "table.csv")
+    assert len(two) == len(one) == 4 and two[0].keys() == one[0].keys()
+    for key in one[0]:
+        a, b = [r[key] for r in one], [r[key] for r in two]
+        try:
+            np.testing.assert_allclose(np.array(b, float), np.array(a, float), rtol=1e-8,
+                                       atol=1e-12, err_msg=key)
+        except ValueError:  # a text column
+            assert a == b, key
+    assert (tmp_path / "two" / "summary.json").exists()
