@@ -12,6 +12,7 @@ import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,26 +23,7 @@ from jaxrail.results import summarize
 from jaxrail.scenarios import parse_scenario
 from jaxrail.simulate import solve
 
-SCENARIO = """
-name = "wheelset-straight"
-[vehicle]
-model = "single-wheelset"
-wheel = "s1002"
-rail = "uic60"
-inclination = "1:40"
-[contact]
-friction = 0.4
-[track]
-segments = [{ kind = "straight", length = 100.0 }]
-[run]
-speed = 10.0
-misalignment = 0.002
-duration = 0.1
-[solver]
-rtol = 1e-4
-atol = 1e-7
-output_rate = 100.0
-"""
+SCENARIO = (Path(__file__).parents[1] / "data" / "wheelset-straight.toml").read_text()
 SAMPLES = {"speed": [5.0, 10.0, 15.0, 12.0], "misalignment": [1e-3, 2e-3, 0.05, 3e-3],
            "friction": [0.3, 0.4, 0.4, 0.5]}
 

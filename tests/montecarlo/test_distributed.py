@@ -6,26 +6,11 @@ import csv
 import socket
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 
-SCENARIO = """
-name = "wheelset-straight"
-description = "a free S1002 wheelset on straight UIC60 1:40 track"
-[vehicle]
-model = "single-wheelset"
-wheel = "s1002"
-rail = "uic60"
-inclination = "1:40"
-[track]
-segments = [{ kind = "straight", length = 60.0 }]
-[run]
-speed = 10.0
-misalignment = 0.002
-duration = 0.05
-[solver]
-output_rate = 200.0
-"""
+SCENARIO = Path(__file__).parents[1] / "data" / "wheelset-straight.toml"
 
 
 def _free_port():
@@ -34,11 +19,11 @@ def _free_port():
         return s.getsockname()[1]
 
 
-def _command(scenario, where, *extra):
-    return [sys.executable, "-m", "jaxrail.cli", "montecarlo", str(scenario), "--samples",
-            "4", "--vary", "speed=8:12", "--vary", "misalignment=0:0.003", "--quiet",
-            "--out", str(where / "table.csv"), "--summary", str(where / "summary.json"),
-            *extra]
+def _command(where, *extra):
+    return [sys.executable, "-m", "jaxrail.cli", "montecarlo", str(SCENARIO), "--samples",
+            "4", "--duration", "0.05", "--vary", "speed=8:12", "--vary",
+            "misalignment=0:0.003", "--quiet", "--out", str(where / "table.csv"),
+            "--summary", str(where / "summary.json"), *extra]
 
 
 def _rows(path):
@@ -47,17 +32,15 @@ def _rows(path):
 
 
 def test_two_processes_give_the_one_process_table(tmp_path):
-    scenario = tmp_path / "wheelset.toml"
-    scenario.write_text(SCENARIO)
     (tmp_path / "one").mkdir()
     (tmp_path / "two").mkdir()
     coordinator = f"localhost:{_free_port()}"
-    runs = [subprocess.Popen(_command(scenario, tmp_path / "two", "--distributed",
+    runs = [subprocess.Popen(_command(tmp_path / "two", "--distributed",
                                       "--coordinator", coordinator, "--num-processes", "2",
                                       "--process-id", str(k)),
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
             for k in (0, 1)]
-    runs.append(subprocess.Popen(_command(scenario, tmp_path / "one"),
+    runs.append(subprocess.Popen(_command(tmp_path / "one"),
                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True))
     outputs = []
     try:
