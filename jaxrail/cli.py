@@ -117,9 +117,7 @@ def _simulate_command(args):
     from .scenarios import load_scenario, run_scenario
 
     scenario = _with_integrator(load_scenario(args.scenario), args)
-    if args.duration is not None and not args.duration > 0.0:
-        raise ValueError(f"--duration must be > 0, got {args.duration}")
-    duration = scenario.duration if args.duration is None else args.duration
+    duration = _duration(scenario, args)
     print(f"jaxrail simulate {scenario.name}: {scenario.description}", file=sys.stderr)
     print(f"compiling, then simulating {duration:g} s ...", file=sys.stderr)
     result, vehicle, params, _ = run_scenario(scenario, duration, progress=not args.quiet,
@@ -218,15 +216,13 @@ def _montecarlo_command(args):
         jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
     if args.samples < 1:
         raise ValueError(f"--samples must be >= 1, got {args.samples}")
-    if args.duration is not None and not args.duration > 0.0:
-        raise ValueError(f"--duration must be > 0, got {args.duration}")
     for path in args.out or ():
         if Path(path).suffix.lower() not in (".csv", ".parquet"):
             raise ValueError(f"--out {path}: the suffix must be .csv or .parquet")
     variations = [parse_variation(v) for v in args.vary or ()]
     check_names([v.name for v in variations], PARAMETERS)
     scenario = _with_integrator(load_scenario(args.scenario), args)
-    duration = scenario.duration if args.duration is None else args.duration
+    duration = _duration(scenario, args)
     import jax
 
     devices = jax.devices()
@@ -283,6 +279,18 @@ def _contact_option(parser):
                         help="tsit5: explicit; imex: creep and contact stiffness implicit, "
                         "steps about 3 times longer (default: the scenario's [solver] "
                         "integrator)")
+
+
+def _duration(scenario, args) -> float:
+    """The run's duration [s]: ``--duration`` (checked, with the run's size) or the
+    scenario's."""
+    from .scenarios import checks
+
+    if args.duration is None:
+        return scenario.duration
+    duration = checks.number(args.duration, "duration", "command line", "--duration")
+    checks.run_size(duration, scenario.output_rate, scenario.fixed_step, "--duration")
+    return duration
 
 
 def _with_integrator(scenario, args):

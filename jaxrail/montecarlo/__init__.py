@@ -14,6 +14,7 @@ import dataclasses
 import numpy as np
 
 from ..identify.parameters import PARAMETERS, get_values
+from ..scenarios import checks
 from .batch import run_chunks
 from .sampling import DESIGNS, Variation, check_names, draw, parse_variation
 from .summary import sample_row
@@ -105,6 +106,9 @@ def run_montecarlo(scenario, variations, n: int, *, seed: int = 0, design: str =
     whose keyword arguments pass through)."""
     variations = [parse_variation(v) if isinstance(v, str) else v for v in variations]
     samples = draw(variations, n, seed=seed, design=design)
+    for name in sorted(set(samples) & set(checks.RANGES)):  # the scenario's own ranges
+        for value in np.asarray(samples[name], dtype=float):
+            checks.number(float(value), name, f"--vary {name}", "a drawn value")
     result = run_samples(scenario, samples, **kwargs)
     result.seed = seed
     return result

@@ -17,6 +17,7 @@ from pathlib import Path
 import equinox as eqx
 
 from ..profiles.named import named_profile
+from . import checks
 from ..simulate import INTEGRATORS, SolverOptions, simulate
 from ..track import Arc, Straight, Track, Transition
 from ..vehicles import CONTACT_MODELS, bogie, contact_model, single_wheelset, trailer
@@ -87,93 +88,94 @@ class Scenario:
         return vehicle, params, self.track()
 
 
-def _require(table, key, kind, where):
-    if key not in table:
-        raise ValueError(f"{where}: missing {key!r}")
-    value = table[key]
-    if kind is float and isinstance(value, int) and not isinstance(value, bool):
-        value = float(value)
-    if not isinstance(value, kind):
-        raise ValueError(f"{where}: {key!r} must be a {kind.__name__}, got {value!r}")
-    return value
+_TABLES = {"vehicle": {"model", "wheel", "rail", "inclination", "data"},
+           "contact": {"friction", "mode"},
+           "track": {"segments"},
+           "run": {"speed", "misalignment", "duration"},
+           "solver": {"rtol", "atol", "output_rate", "fixed_step", "integrator"}}
 
 
 def _segments(raw, where):
     if not isinstance(raw, list) or not raw:
-        raise ValueError(f"{where}: [track] segments must be a non-empty list")
+        raise ValueError(f"{where}: [track] segments must be a non-empty list of tables")
     out = []
     for k, segment in enumerate(raw):
         here = f"{where}: track segment {k + 1}"
+        if not isinstance(segment, dict):
+            raise ValueError(f"{here} must be a table such as {{ kind = \"straight\", "
+                             f"length = 100.0 }}, got {segment!r}")
         kind = segment.get("kind")
         if kind not in _SEGMENTS:
             raise ValueError(f"{here}: kind must be one of {sorted(_SEGMENTS)}, got {kind!r}")
         allowed = _SEGMENTS[kind][1]
-        unknown = set(segment) - allowed - {"kind"}
-        if unknown:
-            raise ValueError(f"{here}: unknown keys {sorted(unknown)} for {kind}")
+        checks.known_keys(segment, allowed | {"kind"}, here, f"a {kind} segment")
         values = {"kind": kind}
-        for key in allowed:
+        for key in sorted(allowed):
             if key == "direction":
-                values[key] = segment.get(key, "left")
-                if values[key] not in ("left", "right"):
-                    raise ValueError(f"{here}: direction must be 'left' or 'right'")
+                values[key] = checks.text(segment, key, here, "", "left", ("left", "right"))
             elif key == "cant":
-                values[key] = float(segment.get(key, 0.0))
+                values[key] = checks.number(segment.get(key, 0.0), "cant", here)
+            elif key not in segment:
+                raise ValueError(f"{here}: missing {key!r}")
             else:
-                values[key] = _require(segment, key, float, here)
-                if values[key] <= 0.0:
-                    raise ValueError(f"{here}: {key} must be > 0, got {values[key]}")
+                values[key] = checks.number(segment[key], key, here)
         out.append(values)
     return tuple(out)
 
 
+def _vehicle_data(vehicle, where):
+    """The vehicle data file of [vehicle] data (relative to the scenario file), checked."""
+    if "data" not in vehicle:
+        return None
+    path = Path(checks.text(vehicle, "data", where, "[vehicle]"))
+    if not path.is_absolute() and Path(where).exists():
+        path = Path(where).parent / path
+    if not path.is_file():
+        raise ValueError(f"{where}: [vehicle] data: no such file {str(path)!r}")
+    return str(path)
+
+
 def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
-    """A :class:`Scenario` from TOML text; ValueError names the file and the entry."""
+    """A :class:`Scenario` from TOML text; ValueError names the file, the entry, what is
+    allowed (:mod:`.checks`) and what was given. Unknown tables and keys are errors."""
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise ValueError(f"{where}: {error}") from error
-    tables = {}
+    checks.known_keys(raw, {"name", "description", *_TABLES}, where, "the scenario")
     for name in ("vehicle", "track", "run", "solver"):
-        if not isinstance(raw.get(name), dict):
+        if name not in raw:
             raise ValueError(f"{where}: missing table [{name}]")
-        tables[name] = raw[name]
+    tables = {name: checks.known_keys(raw.get(name, {}), keys, where, f"[{name}]")
+              for name, keys in _TABLES.items()}
     vehicle, run, solver = tables["vehicle"], tables["run"], tables["solver"]
-    model = _require(vehicle, "model", str, where)
-    if model not in _MODELS:
-        raise ValueError(f"{where}: vehicle model must be one of {_MODELS}, got {model!r}")
+    contact, number = tables["contact"], checks.number
+    fixed_step = solver.get("fixed_step")
     scenario = Scenario(
-        name=_require(raw, "name", str, where),
-        description=raw.get("description", ""),
-        model=model,
-        wheel=_require(vehicle, "wheel", str, where),
-        rail=_require(vehicle, "rail", str, where),
-        inclination=str(vehicle.get("inclination", "1:40")),
-        vehicle_data=vehicle.get("data"),
-        friction=float(raw.get("contact", {}).get("friction", 0.4)),
+        name=checks.text(raw, "name", where, "the scenario"),
+        description=checks.text(raw, "description", where, "the scenario", ""),
+        model=checks.text(vehicle, "model", where, "[vehicle]", choices=_MODELS),
+        wheel=checks.text(vehicle, "wheel", where, "[vehicle]"),
+        rail=checks.text(vehicle, "rail", where, "[vehicle]"),
+        inclination=checks.text(vehicle, "inclination", where, "[vehicle]", "1:40"),
+        vehicle_data=_vehicle_data(vehicle, where),
+        friction=number(contact.get("friction", 0.4), "friction", where, "[contact] friction"),
         segments=_segments(tables["track"].get("segments"), where),
-        speed=_require(run, "speed", float, where),
-        misalignment=float(run.get("misalignment", 0.0)),
-        duration=_require(run, "duration", float, where),
-        rtol=float(solver.get("rtol", 1e-4)),
-        atol=float(solver.get("atol", 1e-7)),
-        output_rate=float(solver.get("output_rate", 50.0)),
+        speed=number(run.get("speed"), "speed", where, "[run] speed"),
+        misalignment=number(run.get("misalignment", 0.0), "misalignment", where,
+                            "[run] misalignment"),
+        duration=number(run.get("duration"), "duration", where, "[run] duration"),
+        rtol=number(solver.get("rtol", 1e-4), "rtol", where, "[solver] rtol"),
+        atol=number(solver.get("atol", 1e-7), "atol", where, "[solver] atol"),
+        output_rate=number(solver.get("output_rate", 50.0), "output_rate", where,
+                           "[solver] output_rate"),
         source=where,
-        fixed_step=None if "fixed_step" not in solver else float(solver["fixed_step"]),
-        contact=raw.get("contact", {}).get("mode", "online"),
-        integrator=solver.get("integrator", "tsit5"),
+        fixed_step=None if fixed_step is None else number(fixed_step, "fixed_step", where,
+                                                          "[solver] fixed_step"),
+        contact=checks.text(contact, "mode", where, "[contact]", "online", CONTACT_MODELS),
+        integrator=checks.text(solver, "integrator", where, "[solver]", "tsit5", INTEGRATORS),
     )
-    if scenario.integrator not in INTEGRATORS:
-        raise ValueError(f"{where}: [solver] integrator must be one of {INTEGRATORS}, got "
-                         f"{scenario.integrator!r}")
-    if scenario.contact not in CONTACT_MODELS:
-        raise ValueError(f"{where}: [contact] mode must be one of {CONTACT_MODELS}, got "
-                         f"{scenario.contact!r}")
-    if scenario.fixed_step is not None and not scenario.fixed_step > 0.0:
-        raise ValueError(f"{where}: fixed_step must be > 0, got {scenario.fixed_step}")
-    for key in ("speed", "duration", "rtol", "atol", "output_rate", "friction"):
-        if not getattr(scenario, key) > 0.0:
-            raise ValueError(f"{where}: {key} must be > 0, got {getattr(scenario, key)}")
+    checks.run_size(scenario.duration, scenario.output_rate, scenario.fixed_step, where)
     return scenario
 
 
