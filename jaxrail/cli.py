@@ -1,6 +1,7 @@
 """The ``jaxrail`` command line (a thin layer over the Python API)."""
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -431,6 +432,34 @@ def build_parser():
     return parser
 
 
+EXIT_FILE_ERROR = 3
+"""Exit status of a file that cannot be written or read (0: done, 1: a run stopped
+early or a fit did not converge, 2: bad input)."""
+
+
+def _prepare_outputs(args):
+    """Check every output path of the command before anything runs: the folder of each
+    output file, and the figures folder, are made if missing and must be writable;
+    raises OSError naming the flag."""
+    options = vars(args)
+    out = options.get("out")
+    files = [("--out", path) for path in (out if isinstance(out, list) else [out])]
+    files += [(f"--{name}", options.get(name)) for name in ("csv", "summary", "plot")]
+    targets = [(flag, Path(path), Path(path).parent) for flag, path in files if path]
+    if options.get("plots"):
+        targets.append(("--plots", Path(options["plots"]), Path(options["plots"])))
+    for flag, path, folder in targets:
+        if folder is not path and path.is_dir():
+            raise OSError(f"{flag} {path}: is a folder, not a file")
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise OSError(f"{flag} {path}: cannot make the folder {folder}: "
+                          f"{error.strerror or error}") from None
+        if not os.access(folder, os.W_OK):
+            raise OSError(f"{flag} {path}: the folder {folder} is not writable")
+
+
 def main(argv=None):
     from ._float64 import enable_float64
     from ._xla_alarms import hidden_xla_alarms
@@ -439,10 +468,14 @@ def main(argv=None):
     args = build_parser().parse_args(argv)
     with hidden_xla_alarms():
         try:
+            _prepare_outputs(args)
             return args.run(args)
         except ValueError as error:
             print(f"jaxrail {args.command}: error: {error}", file=sys.stderr)
             return 2
+        except OSError as error:
+            print(f"jaxrail {args.command}: file error: {error}", file=sys.stderr)
+            return EXIT_FILE_ERROR
 
 
 if __name__ == "__main__":

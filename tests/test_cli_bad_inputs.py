@@ -29,3 +29,19 @@ def test_bad_command_lines_are_named(argv, message, capsys):
     assert main(argv + ["--quiet"]) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("outputs, message", [
+    (["--summary", "{file}/s.json"], "--summary {file}/s.json: cannot make the folder"),
+    (["--plots", "{file}"], "--plots {file}: cannot make the folder"),
+    (["--out", "{folder}"], "--out {folder}: is a folder, not a file"),
+])
+def test_output_paths_are_checked_before_the_run(outputs, message, tmp_path, capsys):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    names = {"file": str(blocker), "folder": str(tmp_path)}
+    argv = ["simulate", SCENARIO, "--duration", "0.01", "--quiet",
+            "--out", str(tmp_path / "run.h5")] + [x.format(**names) for x in outputs]
+    assert main(argv) == 3
+    assert message.format(**names) in capsys.readouterr().err
+    assert not (tmp_path / "run.h5").exists()  # nothing ran, nothing was written
