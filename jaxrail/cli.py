@@ -15,10 +15,22 @@ def _load_profile(name, inclination):
     return named_profile(name, inclination)
 
 
+GAUGE_MM = (600.0, 1700.0)  # [mm] track gauges from narrow (600 mm) to broad (1676 mm)
+
+
+def _check_gauge(gauge_mm):
+    """ValueError unless ``--gauge`` is a track gauge within :data:`GAUGE_MM`."""
+    low, high = GAUGE_MM
+    if not low <= gauge_mm <= high:  # also NaN
+        raise ValueError(f"--gauge must be a track gauge within [{low:g}, {high:g}] mm, got "
+                         f"{gauge_mm}")
+
+
 def _profile_command(args):
     from . import profiles
     from .plots.profiles import plot_wheel_on_rail
 
+    _check_gauge(args.gauge)
     if args.kind is not None:
         kind, profile = args.kind, profiles.read_profile(args.name, kind=args.kind)
     else:
@@ -60,8 +72,7 @@ def _geometry_command(args):
         return profile
 
     shifts_mm = shift_grid_mm(args.shift_from, args.shift_to, args.shift_step)
-    if not (math.isfinite(args.gauge) and args.gauge > 0.0):
-        raise ValueError(f"--gauge must be a positive length in mm, got {args.gauge}")
+    _check_gauge(args.gauge)
     if not math.isfinite(args.yaw_per_shift):
         raise ValueError(f"--yaw-per-shift must be finite, got {args.yaw_per_shift}")
     if args.rail.lower() == "uic60":

@@ -45,3 +45,18 @@ def test_output_paths_are_checked_before_the_run(outputs, message, tmp_path, cap
     assert main(argv) == 3
     assert message.format(**names) in capsys.readouterr().err
     assert not (tmp_path / "run.h5").exists()  # nothing ran, nothing was written
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["geometry", "--gauge", "1"], "--gauge must be a track gauge within [600, 1700] mm, got 1.0"),
+    (["geometry", "--gauge", "1e7"], "--gauge must be a track gauge within [600, 1700] mm"),
+    (["geometry", "--gauge", "nan"], "--gauge must be a track gauge within [600, 1700] mm"),
+    (["geometry", "--shift-from", "-250", "--shift-to", "250"],
+     "--shift-from must be within [-25, 25] mm"),
+    (["geometry", "--shift-step", "1e-6"], "gives 20000001 shifts in [-10.0, 10.0] mm"),
+    (["profile", "s1002", "--gauge", "-1435", "--plot", "p.png"],
+     "--gauge must be a track gauge within [600, 1700] mm, got -1435.0"),
+])
+def test_bad_geometry_and_profile_options_are_named(argv, message, capsys):
+    assert main(argv) == 2
+    assert message in capsys.readouterr().err

@@ -28,6 +28,10 @@ _PATCH_FIELDS = (("y_track_mm", "y_track"), ("y_wheel_mm", "y_wheel"),
 
 
 
+MAX_SHIFT_MM = 25.0  # [mm] lateral shifts of the wheelset a report may ask for
+MAX_SHIFTS = 10_001  # shifts per report
+
+
 def shift_grid_mm(shift_from, shift_to, shift_step):
     """Shifts [mm] from ``shift_from`` to ``shift_to`` (included when on the grid) in steps
     of ``shift_step``; ``ValueError`` naming the CLI option on bad input."""
@@ -35,11 +39,18 @@ def shift_grid_mm(shift_from, shift_to, shift_step):
                         ("--shift-step", shift_step)):
         if not math.isfinite(value):
             raise ValueError(f"{name} must be a finite number, got {value}")
+    for name, value in (("--shift-from", shift_from), ("--shift-to", shift_to)):
+        if abs(value) > MAX_SHIFT_MM:
+            raise ValueError(f"{name} must be within [-{MAX_SHIFT_MM:g}, {MAX_SHIFT_MM:g}] mm "
+                             f"(beyond, the flange is past the rail), got {value}")
     if shift_step <= 0.0:
         raise ValueError(f"--shift-step must be > 0, got {shift_step}")
     if shift_from >= shift_to:
         raise ValueError(f"--shift-from ({shift_from}) must be less than --shift-to ({shift_to})")
     count = int(math.floor((shift_to - shift_from) / shift_step + 1e-9)) + 1
+    if count > MAX_SHIFTS:
+        raise ValueError(f"--shift-step {shift_step} gives {count} shifts in [{shift_from}, "
+                         f"{shift_to}] mm; at most {MAX_SHIFTS}")
     if count < 2:
         raise ValueError(f"--shift-step {shift_step} leaves a single shift in "
                          f"[{shift_from}, {shift_to}]")
