@@ -457,10 +457,10 @@ def _prepare_outputs(args):
     files = [("--out", path) for path in (out if isinstance(out, list) else [out])]
     files += [(f"--{name}", options.get(name)) for name in ("csv", "summary", "plot")]
     targets = [(flag, Path(path), Path(path).parent) for flag, path in files if path]
-    if options.get("plots"):
+    if options.get("plots"):  # a folder of figures
         targets.append(("--plots", Path(options["plots"]), Path(options["plots"])))
     for flag, path, folder in targets:
-        if folder is not path and path.is_dir():
+        if folder != path and path.is_dir():
             raise OSError(f"{flag} {path}: is a folder, not a file")
         try:
             folder.mkdir(parents=True, exist_ok=True)
