@@ -1,4 +1,5 @@
-"""Without float64 the library refuses to build profiles and tracks (DESIGN.md §8)."""
+"""Without float64 the library refuses to build profiles and tracks and to compute creep
+forces (DESIGN.md §8)."""
 
 import os
 import subprocess
@@ -6,8 +7,10 @@ import sys
 
 SCRIPT = """
 import jaxrail.profiles as profiles
+from jaxrail.contact import polach
 from jaxrail.track import straight_track
-for build in (profiles.s1002, profiles.uic60, lambda: straight_track(10.0)):
+for build in (profiles.s1002, profiles.uic60, lambda: straight_track(10.0),
+              lambda: polach(1e4, 0.3, 0.005, 0.004, 0.001, 0.0, 0.0)):
     try:
         build()
     except RuntimeError as error:

@@ -55,6 +55,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from jaxrail._float64 import require_float64
+from jaxrail.contact._checks import check_range
 from jaxrail.contact.elliptic import agm_kq
 
 _NEWTON_STEPS = 6  # from the bracket midpoint: converged to 1e-15 after 3 steps (t <= 40)
@@ -65,7 +66,7 @@ METHODS = ("table", "exact")
 
 def _compiled(fn):
     """``eqx.filter_jit`` with every argument but ``min_curvature_ratio`` and ``method``
-    traced, and the curvature sums ``A``, ``B`` checked (> 0) when they are concrete.
+    traced, and ``A``, ``B``, ``G``, ``nu`` checked when they are concrete.
 
     filter_jit alone treats Python floats as static (one compilation per value); the
     conversion to float64 arrays happens outside, so jit traces them. The check runs
@@ -84,7 +85,7 @@ def _compiled(fn):
             k: v if k in _STATIC_KWARGS else jnp.asarray(v, dtype=jnp.float64)
             for k, v in kwargs.items()
         }
-        _check_curvatures(signature.bind_partial(*args, **kwargs).arguments)
+        _check_inputs(signature.bind_partial(*args, **kwargs).arguments)
         return jitted(*args, **kwargs)
 
     return wrapper
@@ -283,15 +284,13 @@ def _coefficients_of_t(t, method):
     raise ValueError(f"hertz: method must be one of {METHODS}, got {method!r}")
 
 
-def _check_curvatures(arguments):
-    """Raise ValueError if a concrete curvature sum ``A`` or ``B`` is not > 0."""
+def _check_inputs(arguments):
+    """ValueError if a concrete curvature sum ``A``, ``B`` [1/m] or shear modulus ``G``
+    [Pa] is not > 0, or Poisson's ratio ``nu`` is outside (-1, 0.5]."""
     for name in ("A", "B"):
-        value = arguments.get(name)
-        if value is None or isinstance(value, jax.core.Tracer):
-            continue
-        if not np.all(np.asarray(value) > 0.0):
-            raise ValueError(f"hertz: curvature sum {name} must be > 0 [1/m], got "
-                             f"{np.asarray(value).min()}")
+        check_range(f"hertz: curvature sum {name} [1/m]", arguments.get(name), 0.0, np.inf)
+    check_range("hertz: shear modulus G [Pa]", arguments.get("G"), 0.0, np.inf)
+    check_range("hertz: Poisson's ratio nu", arguments.get("nu"), -1.0, 0.5)
 
 
 @_compiled

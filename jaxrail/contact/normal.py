@@ -19,36 +19,15 @@ work. Which law is used is structure (the Python class). See docs/normal-forces.
 import abc
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from jaxrail._float64 import require_float64
+from jaxrail.contact._checks import check_range as _check_range
 
 
 def _as_f64(x):
     return jnp.asarray(x, dtype=jnp.float64)
-
-
-def _check_range(name, value, low, high, low_open=True):
-    """ValueError for a concrete value outside (low, high]; traced values pass."""
-    if isinstance(value, jax.core.Tracer):
-        return
-    try:
-        v = float(value)
-    except TypeError:  # arrays of parameters: check every element
-        v_all = [float(x) for x in jnp.ravel(value)]
-        for v in v_all:
-            _check_scalar(name, v, low, high, low_open)
-        return
-    _check_scalar(name, v, low, high, low_open)
-
-
-def _check_scalar(name, v, low, high, low_open):
-    too_low = v <= low if low_open else v < low
-    if too_low or v > high or v != v:
-        bracket = "(" if low_open else "["
-        raise ValueError(f"{name} must lie in {bracket}{low}, {high}], got {v}")
 
 
 def hertz_power(
@@ -215,6 +194,7 @@ class _DampedHertz(NormalLaw):
         """alpha(c_e) [-]: f = K delta^n (1 + alpha delta_dot / delta_dot^-)."""
 
     def force(self, stiffness, penetration, penetration_rate, impact_velocity=None):
+        _check_range("impact_velocity", impact_velocity, 0.0, jnp.inf)
         v_impact = self.impact_velocity if impact_velocity is None else impact_velocity
         ratio = _as_f64(penetration_rate) / _as_f64(v_impact)
         elastic = hertz_power(stiffness, penetration, self.exponent)

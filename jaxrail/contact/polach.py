@@ -39,8 +39,11 @@ current mu and is not reduced by k_A, k_S (reference 4.3).
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .._float64 import require_float64
+from ._checks import check_range
 from .kalker import kalker_coefficients
 
 _F64 = jnp.float64
@@ -148,6 +151,10 @@ def polach(
         )
     if coefficients is not None and len(coefficients) != 3:
         raise ValueError("coefficients must be a tuple (c11, c22, c23)")
+    require_float64("polach")
+    check_range("polach: friction mu", mu, 0.0, np.inf, low_open=False)
+    check_range("polach: shear modulus G [Pa]", G, 0.0, np.inf)
+    check_range("polach: Poisson's ratio nu", nu, -1.0, 0.5)
 
     q, mu0, a, b = _f64(normal_force), _f64(mu), _f64(a), _f64(b)
     sx, sy, psi = _f64(creepage_x), _f64(creepage_y), _f64(spin)
