@@ -88,6 +88,9 @@ def _simpack_value(text: str):
         return text
 
 
+MIN_WIDTH_M, MAX_WIDTH_M = 0.01, 0.5  # [m] lateral extent of a wheel or rail profile
+
+
 def read_simpack_points(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, dict]:
     """Read a SIMPACK ``.prw``/``.prr`` file.
 
@@ -131,33 +134,42 @@ def read_simpack_points(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray
     points = np.asarray(rows, dtype=np.float64)
 
     def get(name, default=0.0):
-        return fields.get(f"spline.{name}", default)
+        value = fields.get(f"spline.{name}", default)
+        if isinstance(value, str) or not np.isfinite(value):
+            raise ValueError(f"{path}: spline.{name} must be a number, got {value!r}")
+        return float(value)
 
-    min_distance = float(get("point.dist.min"))
+    def flag(name):
+        value = get(name)
+        if value not in (0.0, 1.0):
+            raise ValueError(f"{path}: spline.{name} must be 0 or 1, got {value:g}")
+        return value == 1.0
+
+    min_distance = get("point.dist.min")
     if min_distance >= 1e-12:
         keep = [0]
         for i in range(1, len(points)):
             if abs(points[i, 0] - points[keep[-1], 0]) > min_distance:
                 keep.append(i)
         points = points[keep]
-    points = points + np.array([float(get("shift.y")), float(get("shift.z"))])
-    angle = float(get("rotate")) / float(get("units.ang.f", 1.0))
+    points = points + np.array([get("shift.y"), get("shift.z")])
+    angle = get("rotate") / get("units.ang.f", 1.0)
     if angle != 0.0:
         c, s = np.cos(angle), np.sin(angle)
         points = points @ np.array([[c, -s], [s, c]]).T
-    y_lo, y_hi = float(get("bound.y.min", 1.0)), float(get("bound.y.max", 0.0))
+    y_lo, y_hi = get("bound.y.min", 1.0), get("bound.y.max", 0.0)
     if y_lo < y_hi:
         points = points[(points[:, 0] >= y_lo) & (points[:, 0] <= y_hi)]
-    z_lo, z_hi = float(get("bound.z.min", 1.0)), float(get("bound.z.max", 0.0))
+    z_lo, z_hi = get("bound.z.min", 1.0), get("bound.z.max", 0.0)
     if z_lo < z_hi:
         points[:, 1] = np.clip(points[:, 1], z_lo, z_hi)
-    if int(get("mirror.y")) == 1:
+    if flag("mirror.y"):
         points[:, 0] = -points[:, 0]
-    if int(get("mirror.z")) == 1:
+    if flag("mirror.z"):
         points[:, 1] = -points[:, 1]
-    if int(get("inversion")) == 1:
+    if flag("inversion"):
         points = points[::-1]
-    per_metre = float(get("units.len.f", 1.0))
+    per_metre = get("units.len.f", 1.0)
     if not per_metre > 0.0:
         raise ValueError(f"{path}: units.len.f must be positive, got {per_metre}")
     points = points / per_metre
@@ -210,6 +222,13 @@ def read_profile(
         kind = file_kind
         y_mm = 1e3 * y_m
         z_mm = 1e3 * z_m if kind == "wheel" else -1e3 * z_m  # SIMPACK z points down
+        width = float(np.ptp(y_m))
+        if not MIN_WIDTH_M <= width <= MAX_WIDTH_M:
+            stated = (f"{fields['spline.units.len.f']:g} per metre"
+                      if "spline.units.len.f" in fields else "missing, so metres")
+            raise ValueError(f"{path}: the profile is {width:g} m wide, not a {kind} profile "
+                             f"({MIN_WIDTH_M * 1e3:g}-{MAX_WIDTH_M * 1e3:g} mm): check "
+                             f"units.len.f ({stated}; 1000 for millimetres)")
     else:
         if kind is None:
             raise ValueError(f"kind must be given ('wheel' or 'rail') for text file {path.name}")

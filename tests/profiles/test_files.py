@@ -201,7 +201,7 @@ spline.begin
   mirror.y = 1
   mirror.z = 1
   inversion = 1
-  units.len.f = 1.0   ! metres
+  units.len.f = 100.0   ! user units per metre
   point.begin
 """
     points = "-2 0\n0 0\n1 1\n2 4\n3 9 0.5\n4 16\n"
@@ -209,9 +209,9 @@ spline.begin
     path.write_text(header + points + "  point.end\nspline.end\n")
     y, z, fields = read_simpack_points(path)
     # shift: y+1, z-0.5 -> drop y<0 (the -2 point becomes -1) -> mirror both -> invert
-    np.testing.assert_allclose(y, [-5, -4, -3, -2, -1])
-    np.testing.assert_allclose(z, [-15.5, -8.5, -3.5, -0.5, 0.5])
-    assert fields["spline.units.len.f"] == 1.0
+    np.testing.assert_allclose(y, np.array([-5, -4, -3, -2, -1]) / 100)
+    np.testing.assert_allclose(z, np.array([-15.5, -8.5, -3.5, -0.5, 0.5]) / 100)
+    assert fields["spline.units.len.f"] == 100.0
     rail = read_profile(path)
     np.testing.assert_allclose(np.asarray(rail.values), -z)  # rail height = -z
     rotated = tmp_path / "r.prw"
@@ -235,3 +235,18 @@ def test_bad_simpack_files(tmp_path):
     path.write_text("header.begin\nheader.end\nspline.begin\n point.begin\n point.end\nspline.end\n")
     with pytest.raises(ValueError, match="no points"):
         read_profile(path)
+    rail = "header.begin\n type = 0\nheader.end\nspline.begin\n{} point.begin\n{}point.end\nspline.end\n"
+    points_mm = "".join(f"{y} {-(y / 10) ** 2}\n" for y in range(-35, 36, 5))
+    path = tmp_path / "bad.prr"
+    path.write_text(rail.format("", points_mm))  # millimetres without units.len.f
+    with pytest.raises(ValueError, match=r"the profile is 70 m wide, not a rail profile "
+                       r"\(10-500 mm\): check units.len.f \(missing, so metres; 1000"):
+        read_profile(path)
+    path.write_text(rail.format(" units.len.f = 1000\n mirror.y = abc\n", points_mm))
+    with pytest.raises(ValueError, match="spline.mirror.y must be a number, got 'abc'"):
+        read_profile(path)
+    path.write_text(rail.format(" units.len.f = 1000\n mirror.y = 2\n", points_mm))
+    with pytest.raises(ValueError, match="spline.mirror.y must be 0 or 1, got 2"):
+        read_profile(path)
+    path.write_text(rail.format(" units.len.f = 1000\n", points_mm))
+    assert float(np.ptp(read_simpack_points(path)[0])) == pytest.approx(0.07)
