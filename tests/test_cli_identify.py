@@ -50,6 +50,15 @@ def test_measurements_longer_than_the_run_are_refused(tmp_path):
     assert done.returncode == 2 and "only 1.0 s" in done.stderr
 
 
+def test_measurements_too_dense_for_the_run_are_refused(tmp_path):
+    path = tmp_path / "dense.csv"  # two samples 1 ns apart: 8e9 output times over 1 s
+    write_measurements(path, Measurements([0.0, 1e-9], ("wheelset_lateral_1",),
+                                          [[0.0], [0.0]], [1e-4]))
+    done = run("bogie-curve-entry", "--measured", str(path), "--fit", "friction")
+    assert done.returncode == 2
+    assert "sampled every 1e-09 s need 8000000001 output times" in done.stderr
+
+
 def test_figure_of_a_fit(tmp_path):
     t = np.linspace(0.0, 1.0, 30)
     data = 2.0 * np.exp(-1.5 * t)

@@ -16,6 +16,7 @@ import diffrax
 import jax.numpy as jnp
 import numpy as np
 
+from ..scenarios.checks import MAX_OUTPUTS
 from ..simulate import SolverOptions, solve
 from .fit import POLISH_ITERATIONS, FitResult, channel_standard_errors, least_squares
 from .measurements import (Measurements, channel_values, check_channels,
@@ -93,6 +94,12 @@ def simulation_residuals(vehicle, params, track, names, measurements: Measuremen
     if measurements.time[-1] > duration + 1e-12:
         raise ValueError(f"measurements reach {measurements.time[-1]} s, the simulation "
                          f"only {duration} s")
+    period = sample_period(measurements.time)
+    outputs = int(round(duration / period * OVERSAMPLING)) + 1
+    if outputs > MAX_OUTPUTS:
+        raise ValueError(f"measurements sampled every {period:g} s need {outputs} output times "
+                         f"({OVERSAMPLING} per sample over {duration:g} s); at most "
+                         f"{MAX_OUTPUTS}: resample them")
     noise = jnp.asarray(measurements.noise)
     adjoint = _adjoint(options, forward, adjoint)
 
