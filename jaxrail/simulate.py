@@ -200,14 +200,28 @@ def _wheelset_track_coordinates(vehicle, track, q, qdot):
     return jax.vmap(one)(position, rotation)
 
 
-def _derailment_event(vehicle, track, limits, rest_height):
-    def cond(t, y, args, **kwargs):
+def _stop_events(vehicle, track, limits, rest_height):
+    """The terminating diffrax Event of a run: (derailed, non-finite state)."""
+    def derailed(t, y, args, **kwargs):
         q, qdot = y
         lateral, _, _, heights = _wheelset_track_coordinates(vehicle, track, q, qdot)
         lifted = jnp.any(heights - rest_height > limits.lift)
         off = jnp.any(jnp.abs(lateral) > limits.lateral)
-        return lifted | off | ~jnp.all(jnp.isfinite(q))
-    return diffrax.Event(cond)
+        return lifted | off
+
+    def not_finite(t, y, args, **kwargs):
+        return ~jnp.all(jnp.isfinite(y[0])) | ~jnp.all(jnp.isfinite(y[1]))
+
+    return diffrax.Event((derailed, not_finite))
+
+
+def _starts_derailed(limits, lateral0, misalignment, from_equilibrium):
+    """Whether a run starts beyond the lateral limit: by the misalignment asked for (the
+    static equilibrium of a wheel off its rail does not exist: it is not finite), or by
+    its given initial state's wheelsets (lateral0 (W,) [m])."""
+    if from_equilibrium:
+        return jnp.abs(misalignment) > limits.lateral
+    return jnp.any(jnp.abs(lateral0) > limits.lateral)
 
 
 def _wheel_outputs(vehicle, params, track, q, qdot, model):
@@ -236,7 +250,7 @@ def _integrate(vehicle, track, params, loads, q0, qdot0, rest_heights, t0, t1, t
         solver=options.solver() if solver is None else solver,
         external=loads, max_steps=options.max_steps, adjoint=adjoint, throw=False,
         stepsize_controller=controller,
-        event=_derailment_event(vehicle, track, limits, rest_heights))
+        event=_stop_events(vehicle, track, limits, rest_heights))
 
 
 def _results(vehicle, track, params, model, q0, qdot0, ts, q, qdot, result, derailed,
@@ -290,26 +304,30 @@ def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignmen
     limits = DerailmentLimits() if limits is None else limits
     loads = VehicleLoads(vehicle, params.contact, track, resolve_contact_model(contact_model))
     q0, qdot0 = _start(vehicle, track, params, speed, misalignment, s0, initial, loads.model)
-    _, _, _, rest_heights = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
+    lateral0, _, _, rest_heights = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
     ts = jnp.linspace(0.0, t1, options.n_outputs)
     sol = _integrate(vehicle, track, params, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
                      options.controller()[1], options, limits, solver, adjoint)
     q, qdot = sol.ys
-    derailed = sol.event_mask if sol.event_mask is not None else jnp.asarray(False)
+    # a state that only turned non-finite is not derailed: diffrax's event_occurred
+    # result makes the status "failed"
+    derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, misalignment,
+                                                    initial is None)
     return _results(vehicle, track, params, loads.model, q0, qdot0, sol.ts, q, qdot,
                     sol.result, derailed, sol.stats["num_steps"],
                     sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
 
 
-def _segment(vehicle, track, params, q0, qdot0, rest_heights, t0, t1, ts, dt0, options,
-             limits, solver, contact_model):
+def _segment(vehicle, track, params, q0, qdot0, rest_heights, started_derailed, t0, t1, ts,
+             dt0, options, limits, solver, contact_model):
     """One segment of a run with a progress bar: from (q0, qdot0) at t0 to t1 [s],
     saved at ``ts`` (the last one is t1). Returns (q, qdot) at ``ts``, diffrax's result
-    code, whether the run derailed, and the steps taken, accepted and rejected."""
+    code, whether the run derailed (or ``started_derailed``), and the steps taken,
+    accepted and rejected."""
     loads = VehicleLoads(vehicle, params.contact, track, contact_model)
     sol = _integrate(vehicle, track, params, loads, q0, qdot0, rest_heights, t0, t1, ts,
                      dt0, options, limits, solver, None)
-    derailed = sol.event_mask if sol.event_mask is not None else jnp.asarray(False)
+    derailed = sol.event_mask[0] | started_derailed
     return (sol.ys, sol.result, derailed, sol.stats["num_steps"],
             sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
 
@@ -358,14 +376,16 @@ def _segment_outputs(n_outputs):
 
 
 def _run_in_segments(timer, vehicle, track, params, t1, q0, qdot0, options, limits,
-                     solver, contact_model):
+                     solver, contact_model, misalignment, from_equilibrium):
     """Integrate segment by segment, drawing the progress bar between them; returns the
     arguments of :func:`_results` after (q0, qdot0, ts)."""
     ts = np.linspace(0.0, float(t1), options.n_outputs)
     q = np.full((options.n_outputs, q0.shape[0]), np.nan)
     qdot = np.full_like(q, np.nan)
     q[0], qdot[0] = q0, qdot0
-    rest_heights = timer.run(_wheelset_track_coordinates, vehicle, track, q0, qdot0)[3]
+    lateral0, _, _, rest_heights = timer.run(_wheelset_track_coordinates, vehicle, track, q0,
+                                             qdot0)
+    started = _starts_derailed(limits, lateral0, misalignment, from_equilibrium)
     static = dict(options=options, limits=limits, solver=solver, contact_model=contact_model)
     result, derailed, counts = diffrax.RESULTS.successful, False, np.zeros(3, dtype=int)
     t0, dt0, state = 0.0, options.controller()[1], (q0, qdot0)
@@ -373,7 +393,8 @@ def _run_in_segments(timer, vehicle, track, params, t1, q0, qdot0, options, limi
     with SimulatedTimeBar(float(t1)) as bar:
         for indices in _segment_outputs(options.n_outputs):
             t_end = ts[indices[-1]]
-            args = (vehicle, track, params, *state, rest_heights, jnp.float64(t0),
+            args = (vehicle, track, params, *state, rest_heights, jnp.asarray(started),
+                    jnp.float64(t0),
                     jnp.float64(t_end), jnp.asarray(ts[indices]), jnp.float64(dt0))
             if run_segment is None:
                 run_segment = timer.compile(_segment, *args, **static)
@@ -390,7 +411,7 @@ def _run_in_segments(timer, vehicle, track, params, t1, q0, qdot0, options, limi
                 break
             if options.fixed_step is None:  # the next segment starts with this one's mean step
                 dt0 = (t_end - t0) / max(int(stats[1]), 1)
-            t0, state = t_end, (q_seg[-1], qdot_seg[-1])
+            t0, state, started = t_end, (q_seg[-1], qdot_seg[-1]), False
     for x in (q, qdot):
         x[~np.isfinite(x).all(axis=1)] = np.nan
     return (jnp.asarray(q), jnp.asarray(qdot), result, jnp.asarray(derailed),
@@ -423,13 +444,15 @@ def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: f
     t1, speed, misalignment = (jnp.float64(x) for x in (t1, speed, misalignment))
     s0 = None if s0 is None else jnp.float64(s0)
     timer = _Timer()
-    if initial is None:
+    from_equilibrium = initial is None
+    if from_equilibrium:
         initial = timer.run(initial_state, vehicle, params, track, speed, misalignment, s0,
                             contact_model)
     initial = tuple(jnp.asarray(x, dtype=jnp.float64) for x in initial)
     if options.progress:
         outputs = _run_in_segments(timer, vehicle, track, params, t1, *initial, options,
-                                   limits, solver, contact_model)
+                                   limits, solver, contact_model, misalignment,
+                                   from_equilibrium)
         ts = jnp.linspace(0.0, t1, options.n_outputs)
         result = timer.run(_results, vehicle, track, params, contact_model, *initial,
                            ts, *outputs)

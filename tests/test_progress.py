@@ -48,6 +48,13 @@ def test_a_derailment_stops_the_segments_and_keeps_the_start():
     assert np.all(np.isnan(np.asarray(result.wheelset_lateral)[~valid]))
 
 
+@pytest.mark.parametrize("progress", [False, True])
+def test_a_non_finite_state_fails_rather_than_derails(progress):
+    result = _run(progress, lateral=float("nan"))
+    assert result.status == "failed" and not bool(result.derailed)
+    assert result.simulated_time_s == 0.0
+
+
 def test_bar_counts_simulated_seconds_and_shows_the_real_time_factor(capfd):
     _run(True)
     shown = capfd.readouterr().err
