@@ -87,9 +87,10 @@ def _geometry_command(args):
                 "yaw_per_shift_unit": "mrad/mm", "shift_from_mm": args.shift_from,
                 "shift_to_mm": args.shift_to, "shift_step_mm": args.shift_step}
     report, _ = geometry_report(wheel, rail, shifts_mm, args.gauge, args.yaw_per_shift, settings)
-    if report["max_residual_mm"] > 1e-6:
-        print(f"jaxrail geometry: warning: wheel-rail contact solve residual "
-              f"{report['max_residual_mm']:.3g} mm", file=sys.stderr)
+    unsolved = [row["shift_mm"] for row in report["rows"] if not row["converged"]]
+    if unsolved:
+        print(f"jaxrail geometry: warning: the contact solve did not converge at shifts "
+              f"{unsolved} mm; those rows are marked \"converged\": false", file=sys.stderr)
     missing = [c["amplitude_mm"] for c in report["conicity"] if c["tan_gamma_e"] is None]
     if missing:
         print(f"jaxrail geometry: note: the shift range does not cover amplitudes {missing} mm;"

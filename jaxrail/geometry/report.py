@@ -21,7 +21,12 @@ from .quasistatic import wheelset_geometry
 CONICITY_AMPLITUDES_MM = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
 HALF_CONTACT_DISTANCE = 0.75  # [m] e of the conicity formula (EN 15302, standard gauge)
 CSV_COLUMNS = ("shift_mm", "side", "patch", "y_track_mm", "y_wheel_mm", "rolling_radius_mm",
-               "contact_angle_rad", "penetration_mm", "roll_rad", "delta_r_mm")
+               "contact_angle_rad", "penetration_mm", "roll_rad", "delta_r_mm", "converged")
+# A row is converged when the solve's depth error is below RESIDUAL_TOLERANCE and the
+# deepest patch the search then finds on each wheel is the virtual penetration to within
+# DEPTH_TOLERANCE: everywhere but at a handful of flange-root poses they agree to 1e-11 m.
+RESIDUAL_TOLERANCE = 1e-9  # [m]
+DEPTH_TOLERANCE = 1e-7  # [m]
 _PATCH_FIELDS = (("y_track_mm", "y_track"), ("y_wheel_mm", "y_wheel"),
                  ("rolling_radius_mm", "rolling_radius"), ("contact_angle_rad", "contact_angle"),
                  ("penetration_mm", "penetration"))
@@ -82,19 +87,24 @@ def conicity_entries(shifts_m, delta_r_m, nominal_radius_m, amplitudes_mm=CONICI
             for a, v in zip(amplitudes_mm, values)]
 
 
-def geometry_rows(result):
-    """One dict per shift [mm, rad] from a :class:`WheelsetGeometry`: ``shift_mm``,
-    ``roll_rad``, ``delta_r_mm`` and the active patches of the ``left`` and ``right``
+def geometry_rows(result, virtual_penetration=1.0e-6):
+    """One dict per shift [mm, rad] from a :class:`WheelsetGeometry` solved at
+    ``virtual_penetration`` [m]: ``shift_mm``, ``roll_rad``, ``delta_r_mm``,
+    ``converged`` (module constants; a row that did not converge holds the contact at
+    the wrong depth) and the active patches of the ``left`` and ``right``
     wheel in lateral slot order (``y_track_mm`` from the track centre, positive left;
     ``y_wheel_mm`` from the taping line, positive toward the field side)."""
     patches = result.patches
     active = np.asarray(patches.active)
     fields = {key: np.asarray(getattr(patches, name)) for key, name in _PATCH_FIELDS}
     shifts, roll, delta_r = (np.asarray(x) for x in (result.shift, result.roll, result.delta_r))
+    deepest = np.where(active, fields["penetration_mm"], -np.inf).max(axis=2)  # (n, 2) [m]
+    converged = ((np.asarray(result.residual) <= RESIDUAL_TOLERANCE)
+                 & np.all(np.abs(deepest - virtual_penetration) <= DEPTH_TOLERANCE, axis=1))
     rows = []
     for k in range(shifts.shape[0]):
         row = {"shift_mm": float(np.round(1e3 * shifts[k], 9)), "roll_rad": float(roll[k]),
-               "delta_r_mm": float(1e3 * delta_r[k])}
+               "delta_r_mm": float(1e3 * delta_r[k]), "converged": bool(converged[k])}
         for side_index, side in enumerate(("left", "right")):
             row[side] = [
                 {key: float(values[k, side_index, slot] * (1.0 if key.endswith("_rad") else 1e3))
@@ -147,5 +157,6 @@ def report_csv(report) -> str:
             for number, patch in enumerate(row[side]):
                 writer.writerow([repr(row["shift_mm"]), side, number]
                                 + [repr(patch[key]) for key, _ in _PATCH_FIELDS]
-                                + [repr(row["roll_rad"]), repr(row["delta_r_mm"])])
+                                + [repr(row["roll_rad"]), repr(row["delta_r_mm"]),
+                                   str(row["converged"]).lower()])
     return stream.getvalue()

@@ -94,12 +94,13 @@ def test_csv_and_plot(run, capsys):
     lines = list(csv.reader(io.StringIO(capsys.readouterr().out)))
     assert lines[0] == ["shift_mm", "side", "patch", "y_track_mm", "y_wheel_mm",
                         "rolling_radius_mm", "contact_angle_rad", "penetration_mm",
-                        "roll_rad", "delta_r_mm"]
+                        "roll_rad", "delta_r_mm", "converged"]
     report = run[0]
     assert len(lines) - 1 == sum(len(r["left"]) + len(r["right"]) for r in report["rows"])
     first = lines[1]
     assert float(first[0]) == -10.0 and first[1] == "left" and first[2] == "0"
     assert float(first[3]) == report["rows"][0]["left"][0]["y_track_mm"]
+    assert first[10] == "true"
 
 
 @pytest.mark.parametrize("change, option", [

@@ -167,3 +167,14 @@ def test_s1002_uic60_conicity_range(real):
     """S1002 / UIC60 1:40 / 1435: the usual equivalent conicity at 3 mm is about 0.15-0.2."""
     values = equivalent_conicity(SHIFTS, real.delta_r, [3e-3])
     assert 0.12 < float(values[0]) < 0.25
+
+
+def test_rows_say_whether_the_contact_solve_converged(real):
+    """Every row of S1002 on UIC60 1:40 converges; on 1:20 at +6.5 mm the left wheel's
+    deepest patch is 0.085 mm deep instead of the virtual 0.001 mm, and its row says so
+    (the brute-force search, tests above, is the reference for the converged rows)."""
+    from jaxrail.geometry.report import geometry_rows
+
+    assert all(row["converged"] for row in geometry_rows(real))
+    steep = geometry_rows(geometry(s1002(), uic60("1:20"), jnp.asarray(SHIFTS)))
+    assert [row["shift_mm"] for row in steep if not row["converged"]] == [6.5]
