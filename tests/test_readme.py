@@ -1,12 +1,11 @@
-"""The README's Python examples run as written (each in a fresh process), and
-``import jaxrail`` exposes the names a user starts from."""
+"""The README's contact-search example runs as written in a fresh process (its
+simulation example runs in tests/vehicles/test_trailer.py, reusing that module's
+compiled programs), and ``import jaxrail`` exposes the names a user starts from."""
 
 import re
 import subprocess
 import sys
 from pathlib import Path
-
-import pytest
 
 README = Path(__file__).parents[1] / "README.md"
 EXAMPLES = re.findall(r"```python\n(.*?)```", README.read_text(), re.S)
@@ -17,13 +16,10 @@ def test_the_readme_has_a_simulation_and_a_search_example():
     assert "run_scenario" in EXAMPLES[0] and "search_wheelset" in EXAMPLES[1]
 
 
-@pytest.mark.parametrize("example", EXAMPLES, ids=["simulation", "contact-search"])
-def test_readme_example_runs(example):
-    done = subprocess.run([sys.executable, "-c", example], capture_output=True, text=True,
-                          timeout=600)
+def test_readme_search_example_runs():
+    done = subprocess.run([sys.executable, "-c", EXAMPLES[1]], capture_output=True,
+                          text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-3000:]
-    if "run_scenario" in example:
-        assert done.stdout.startswith("successful 1.0")
 
 
 def test_top_level_names():

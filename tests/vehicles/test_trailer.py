@@ -9,6 +9,8 @@ loads are computed here by hand from the Manchester benchmark masses of
 shared/reference/vehicle.md, not from jaxrail."""
 
 import json
+import re
+from pathlib import Path
 
 import h5py
 import jax
@@ -176,3 +178,14 @@ def test_a_derailment_stops_the_run_and_keeps_the_results_so_far(command_run):
     assert np.max(np.abs(np.asarray(result.wheelset_lateral[:stop]))) <= limit + tolerance
     assert np.max(lateral[start:start + stop + 1]) > limit - tolerance
     assert np.all(np.isnan(np.asarray(result.wheels.normal_force[stop:])))
+
+
+def test_readme_simulation_example_runs(command_run, capsys):
+    """The README's first Python example, as written, in this process: it asks for the
+    programs of ``command_run`` (the same scenario, duration and options), so it
+    compiles nothing more."""
+    readme = Path(__file__).parents[2] / "README.md"
+    example = re.findall(r"```python\n(.*?)```", readme.read_text(), re.S)[0]
+    capsys.readouterr()
+    exec(compile(example, "README.md", "exec"), {})
+    assert capsys.readouterr().out.startswith("successful 1.0")
