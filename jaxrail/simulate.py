@@ -215,13 +215,13 @@ def _stop_events(vehicle, track, limits, rest_height):
     return diffrax.Event((derailed, not_finite))
 
 
-def _starts_derailed(limits, lateral0, misalignment, from_equilibrium):
-    """Whether a run starts beyond the lateral limit: by the misalignment asked for (the
-    static equilibrium of a wheel off its rail does not exist: it is not finite), or by
-    its given initial state's wheelsets (lateral0 (W,) [m])."""
-    if from_equilibrium:
-        return jnp.abs(misalignment) > limits.lateral
-    return jnp.any(jnp.abs(lateral0) > limits.lateral)
+def _starts_derailed(limits, lateral0, misalignment):
+    """Whether a run starts beyond the lateral limit: its initial wheelsets (lateral0
+    (W,) [m]) are, or the start is not finite and the misalignment asked for is beyond
+    it (the static equilibrium of a wheel off its rail does not exist)."""
+    unknown = ~jnp.all(jnp.isfinite(lateral0))
+    return (jnp.any(jnp.abs(lateral0) > limits.lateral)
+            | (unknown & (jnp.abs(misalignment) > limits.lateral)))
 
 
 def _wheel_outputs(vehicle, params, track, q, qdot, model):
@@ -311,8 +311,7 @@ def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignmen
     q, qdot = sol.ys
     # a state that only turned non-finite is not derailed: diffrax's event_occurred
     # result makes the status "failed"
-    derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, misalignment,
-                                                    initial is None)
+    derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, misalignment)
     return _results(vehicle, track, params, loads.model, q0, qdot0, sol.ts, q, qdot,
                     sol.result, derailed, sol.stats["num_steps"],
                     sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
@@ -376,16 +375,16 @@ def _segment_outputs(n_outputs):
 
 
 def _run_in_segments(timer, vehicle, track, params, t1, q0, qdot0, options, limits,
-                     solver, contact_model, misalignment, from_equilibrium):
+                     solver, contact_model, misalignment):
     """Integrate segment by segment, drawing the progress bar between them; returns the
-    arguments of :func:`_results` after (q0, qdot0, ts)."""
+    arguments of :func:`_results` after (q0, qdot0)."""
     ts = np.linspace(0.0, float(t1), options.n_outputs)
     q = np.full((options.n_outputs, q0.shape[0]), np.nan)
     qdot = np.full_like(q, np.nan)
     q[0], qdot[0] = q0, qdot0
     lateral0, _, _, rest_heights = timer.run(_wheelset_track_coordinates, vehicle, track, q0,
                                              qdot0)
-    started = _starts_derailed(limits, lateral0, misalignment, from_equilibrium)
+    started = _starts_derailed(limits, lateral0, misalignment)
     static = dict(options=options, limits=limits, solver=solver, contact_model=contact_model)
     result, derailed, counts = diffrax.RESULTS.successful, False, np.zeros(3, dtype=int)
     t0, dt0, state = 0.0, options.controller()[1], (q0, qdot0)
@@ -414,7 +413,7 @@ def _run_in_segments(timer, vehicle, track, params, t1, q0, qdot0, options, limi
             t0, state, started = t_end, (q_seg[-1], qdot_seg[-1]), False
     for x in (q, qdot):
         x[~np.isfinite(x).all(axis=1)] = np.nan
-    return (jnp.asarray(q), jnp.asarray(qdot), result, jnp.asarray(derailed),
+    return (jnp.asarray(ts), jnp.asarray(q), jnp.asarray(qdot), result, jnp.asarray(derailed),
             *(jnp.asarray(c) for c in counts))
 
 
@@ -444,18 +443,15 @@ def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: f
     t1, speed, misalignment = (jnp.float64(x) for x in (t1, speed, misalignment))
     s0 = None if s0 is None else jnp.float64(s0)
     timer = _Timer()
-    from_equilibrium = initial is None
-    if from_equilibrium:
+    if initial is None:
         initial = timer.run(initial_state, vehicle, params, track, speed, misalignment, s0,
                             contact_model)
     initial = tuple(jnp.asarray(x, dtype=jnp.float64) for x in initial)
     if options.progress:
         outputs = _run_in_segments(timer, vehicle, track, params, t1, *initial, options,
-                                   limits, solver, contact_model, misalignment,
-                                   from_equilibrium)
-        ts = jnp.linspace(0.0, t1, options.n_outputs)
+                                   limits, solver, contact_model, misalignment)
         result = timer.run(_results, vehicle, track, params, contact_model, *initial,
-                           ts, *outputs)
+                           *outputs)
     else:
         result = timer.run(solve, vehicle, track, params, t1, speed, misalignment, s0,
                            options=options, limits=limits, initial=initial, solver=solver,
