@@ -57,6 +57,19 @@ def sample_period(times) -> float:
     return float(times[-1] - times[0]) / (len(times) - 1)
 
 
+def output_count(times, duration) -> int:
+    """The simulation's output times for samples at ``times`` (M,) [s] over ``duration``
+    [s]: ``OVERSAMPLING`` per sample period; ValueError beyond
+    :data:`jaxrail.scenarios.checks.MAX_OUTPUTS`."""
+    period = sample_period(times)
+    outputs = int(round(duration / period * OVERSAMPLING)) + 1
+    if outputs > MAX_OUTPUTS:
+        raise ValueError(f"measurements sampled every {period:g} s need {outputs} output times "
+                         f"({OVERSAMPLING} per sample over {duration:g} s); at most "
+                         f"{MAX_OUTPUTS}: resample them")
+    return outputs
+
+
 def simulate_channels(vehicle, params, track, channels, times, *, speed, misalignment,
                       duration, options: SolverOptions, s0=None, adjoint=None, cutoff=None,
                       contact_model=None):
@@ -68,8 +81,8 @@ def simulate_channels(vehicle, params, track, channels, times, *, speed, misalig
     ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's search)."""
     period = sample_period(times)
     cutoff = CUTOFF_FRACTION / period if cutoff is None else cutoff
-    n_outputs = int(round(duration / period * OVERSAMPLING)) + 1
-    options = dataclasses.replace(options, n_outputs=max(options.n_outputs, n_outputs))
+    options = dataclasses.replace(options, n_outputs=max(options.n_outputs,
+                                                         output_count(times, duration)))
     result = solve(vehicle, track, params, duration, speed, misalignment, s0, options=options,
                    adjoint=adjoint, contact_model=contact_model)
     values = channel_values(channels, vehicle, params, track, result, contact_model)
@@ -94,12 +107,7 @@ def simulation_residuals(vehicle, params, track, names, measurements: Measuremen
     if measurements.time[-1] > duration + 1e-12:
         raise ValueError(f"measurements reach {measurements.time[-1]} s, the simulation "
                          f"only {duration} s")
-    period = sample_period(measurements.time)
-    outputs = int(round(duration / period * OVERSAMPLING)) + 1
-    if outputs > MAX_OUTPUTS:
-        raise ValueError(f"measurements sampled every {period:g} s need {outputs} output times "
-                         f"({OVERSAMPLING} per sample over {duration:g} s); at most "
-                         f"{MAX_OUTPUTS}: resample them")
+    output_count(measurements.time, duration)  # refuse too dense samples before tracing
     noise = jnp.asarray(measurements.noise)
     adjoint = _adjoint(options, forward, adjoint)
 

@@ -120,8 +120,6 @@ def _dense_info(h, y0, y1, f0):
     return dict(y0=y0, y1=y1, k0=k0, k1=k1)
 
 
-
-
 def _weighted(rows, stacked):
     """sum_j rows[j] * stacked[j] over the leading (stage) axis of each leaf."""
     return jax.tree.map(lambda x: jnp.tensordot(rows, x, axes=1), stacked)
