@@ -22,6 +22,7 @@ NEWTON_STEPS = 12
 _PROBE = 1.0e-7  # [m] and [rad]: forward-difference step of the Newton Jacobian
 _TRACK_LENGTH = 20.0
 _STATION = 10.0
+VIRTUAL_PENETRATION = 1.0e-6  # [m] default depth each wheel is pressed into its rail
 
 
 class WheelsetGeometry(eqx.Module):
@@ -55,7 +56,8 @@ class WheelsetGeometry(eqx.Module):
 
 @jax.jit
 def wheelset_geometry(wheel, rail, shifts, gauge=1.435, yaw_per_shift=0.0,
-                      virtual_penetration=1.0e-6, config: SearchConfig = SearchConfig()):
+                      virtual_penetration=VIRTUAL_PENETRATION,
+                      config: SearchConfig = SearchConfig()):
     """Quasi-static geometry of a wheelset shifted across straight track.
 
     Arguments:

@@ -112,7 +112,8 @@ def _segments(raw, where):
         values = {"kind": kind}
         for key in sorted(allowed):
             if key == "direction":
-                values[key] = checks.text(segment, key, here, "", "left", ("left", "right"))
+                values[key] = checks.text(segment, key, here, f"a {kind} segment", "left",
+                                          ("left", "right"))
             elif key == "cant":
                 values[key] = checks.number(segment.get(key, 0.0), "cant", here)
             elif key not in segment:
