@@ -40,10 +40,10 @@ def measure(scenario_name, samples, duration, seed, device_counts, sequential, c
     drawn = draw([parse_variation(f"speed={0.8 * scenario.speed}:{1.2 * scenario.speed}"),
                   parse_variation("misalignment=0:4e-3")], samples, seed=seed)
     options = scenario.solver_options(duration=duration)
-    model = scenario.contact_model(vehicle, contact)
+    model = scenario.contact_model(vehicle, params, contact)
     report = {"host_devices": len(jax.devices()), "batches": []}
     if sequential:
-        one = jax.jit(lambda v, m: solve(vehicle, track, params, duration, v, m,
+        one = jax.jit(lambda v, m: solve(vehicle, params, track, duration, v, m,
                                          options=options, contact_model=model))
         start = time.perf_counter()
         one = one.lower(drawn["speed"][0], drawn["misalignment"][0]).compile()

@@ -69,7 +69,7 @@ def main():
         run_options = scenario.solver_options(duration=duration)
 
         def run(v, q, qdot):
-            return solve(vehicle, track, params, duration, v, 0.0, options=run_options,
+            return solve(vehicle, params, track, duration, v, 0.0, options=run_options,
                          initial=(q, qdot))
 
         if batched:

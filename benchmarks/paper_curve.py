@@ -95,9 +95,9 @@ def _compile_only(name, contact, integrator, duration):
     scenario = dataclasses.replace(load_scenario(name), integrator=integrator)
     vehicle, params, track = scenario.build()
     duration = scenario.duration if duration is None else duration
-    result = simulate(vehicle, track, params, 1e-3, scenario.speed, scenario.misalignment,
+    result = simulate(vehicle, params, track, 1e-3, scenario.speed, scenario.misalignment,
                       options=scenario.solver_options(duration),
-                      contact_model=scenario.contact_model(vehicle, contact))
+                      contact_model=scenario.contact_model(vehicle, params, contact))
     return {"compile_time_s": float(result.compile_time_s), "status": result.status}
 
 

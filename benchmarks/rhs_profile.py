@@ -101,12 +101,12 @@ def profile_model(model, vehicle, params, track, q, qdot, calls, batch):
     @parts_of
     def contact(q, qdot, vehicle, track, params, model):
         position, rotation, _, _ = wheelset_states(vehicle, q, qdot)
-        return jax.vmap(lambda r, a: model.wheelset_patches(vehicle, track, r, a))(
+        return jax.vmap(lambda r, a: model.wheelset_patches(vehicle, params, track, r, a))(
             position, rotation)
 
     @parts_of
     def loads(q, qdot, vehicle, track, params, model):
-        return contact_loads(vehicle, params.contact, track, q, qdot, model)[:2]
+        return contact_loads(vehicle, params, track, q, qdot, model)[:2]
 
     @parts_of
     def multibody(q, qdot, vehicle, track, params, model):
@@ -150,7 +150,7 @@ def main():
     args = parser.parse_args()
     scenario = load_scenario(args.scenario)
     vehicle, params, track = scenario.build()
-    table, table_info = contact_table(vehicle.wheel, vehicle.rail, vehicle.rail_offset,
+    table, table_info = contact_table(params.wheel, params.rail, params.rail_offset,
                                       vehicle.config, progress=True)
     models = {"online": OnlineContact(), "table": TableContact(table)}
     q, qdot = jax.jit(lambda p: initial_state(vehicle, p, track, scenario.speed,

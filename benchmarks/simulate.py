@@ -37,7 +37,7 @@ def main():
     load_before = os.getloadavg()
     for rtol in args.rtol:
         options = SolverOptions(rtol=rtol, atol=rtol * 1e-3, n_outputs=int(args.duration * 50) + 1)
-        result = simulate(vehicle, track, params, args.duration, args.speed, 2e-3, options=options)
+        result = simulate(vehicle, params, track, args.duration, args.speed, 2e-3, options=options)
         steps = int(result.steps)
         runs.append({
             "rtol": rtol, "atol": rtol * 1e-3, "status": result.status,

@@ -39,7 +39,7 @@ def main():
     options = SolverOptions(rtol=args.rtol, atol=args.rtol * 1e-3, n_outputs=3)
     runs = []
     for name in args.solvers:
-        result = simulate(vehicle, track, params, args.duration, 18.3, 2e-3, options=options,
+        result = simulate(vehicle, params, track, args.duration, 18.3, 2e-3, options=options,
                           solver=getattr(diffrax, name)())
         runs.append({
             "solver": name, "implicit": name.startswith("Kvaerno"), "status": result.status,

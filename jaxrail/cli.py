@@ -220,7 +220,7 @@ def _montecarlo_command(args):
 
     from .montecarlo import parse_variation, run_montecarlo, write_table
     from .montecarlo.sampling import check_names
-    from .identify import PARAMETERS
+    from .vehicles.parameters import PARAMETERS
     from .scenarios import load_scenario
 
     if args.distributed:
@@ -320,8 +320,8 @@ def _tables_command(args):
     from .scenarios import load_scenario
 
     scenario = _with_integrator(load_scenario(args.scenario), args)
-    vehicle, _, _ = scenario.build()
-    where = (vehicle.wheel, vehicle.rail, vehicle.rail_offset, vehicle.config)
+    vehicle, params, _ = scenario.build()
+    where = (params.wheel, params.rail, params.rail_offset, vehicle.config)
     if args.action == "build":
         _, info = contact_table(*where, progress=not args.quiet, cache=True)
     else:

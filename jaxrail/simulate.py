@@ -1,6 +1,6 @@
 """Simulation of a vehicle on a track: initial equilibrium, integration, outputs.
 
-``simulate(vehicle, track, params, t1, speed=..., misalignment=...)`` puts the vehicle
+``simulate(vehicle, params, track, t1, speed=..., misalignment=...)`` puts the vehicle
 at rest on its wheels (:func:`jaxrail.vehicles.initial_state`), integrates the
 equations of motion (eq. 19 with Baumgarte stabilisation) with the wheel-rail loads of
 every wheelset by diffrax, and returns a :class:`SimulationResult`: body states at the
@@ -226,7 +226,7 @@ def _starts_derailed(limits, lateral0, misalignment):
 
 def _wheel_outputs(vehicle, params, track, q, qdot, model):
     """WheelOutputs at one state (leading shape (W, 2, P))."""
-    _, _, patches, forces = contact_loads(vehicle, params.contact, track, q, qdot, model)
+    _, _, patches, forces = contact_loads(vehicle, params, track, q, qdot, model)
     position, _, _, _ = wheelset_states(vehicle, q, qdot)
     frames = jax.vmap(lambda r: track_frame(track, to_track_coordinates(track, r)[0]))(position)
     side = jnp.array([1.0, -1.0])[None, :]
@@ -239,7 +239,7 @@ def _wheel_outputs(vehicle, params, track, q, qdot, model):
                         forces.creepage_y, forces.spin, lateral, vertical)
 
 
-def _integrate(vehicle, track, params, loads, q0, qdot0, rest_heights, t0, t1, ts, dt0,
+def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t0, t1, ts, dt0,
                options, limits, solver, adjoint):
     """diffrax's Solution of eq. (19) from (q0, qdot0) at t0 to t1 [s], saved at ``ts``,
     stopped by the derailment event; ``dt0`` [s]: the first step."""
@@ -253,7 +253,7 @@ def _integrate(vehicle, track, params, loads, q0, qdot0, rest_heights, t0, t1, t
         event=_stop_events(vehicle, track, limits, rest_heights))
 
 
-def _results(vehicle, track, params, model, q0, qdot0, ts, q, qdot, result, derailed,
+def _results(vehicle, params, track, model, q0, qdot0, ts, q, qdot, result, derailed,
              steps, accepted_steps, rejected_steps):
     """SimulationResult from the states at the output times (non-finite rows: not
     reached), without host timings."""
@@ -282,14 +282,14 @@ def _results(vehicle, track, params, model, q0, qdot0, ts, q, qdot, result, dera
         compile_time_s=jnp.asarray(jnp.nan))
 
 
-def _start(vehicle, track, params, speed, misalignment, s0, initial, model):
+def _start(vehicle, params, track, speed, misalignment, s0, initial, model):
     """(q0, qdot0): ``initial``, or the static equilibrium."""
     if initial is None:
         return initial_state(vehicle, params, track, speed, misalignment, s0, model)
     return tuple(jnp.asarray(x, dtype=jnp.float64) for x in initial)
 
 
-def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignment=0.0,
+def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignment=0.0,
           s0=None, options: SolverOptions = SolverOptions(),
           limits: DerailmentLimits | None = None, solver=None, adjoint=None,
           initial=None, contact_model=None):
@@ -302,29 +302,29 @@ def solve(vehicle: Vehicle, track, params: VehicleParams, t1, speed, misalignmen
     ``options.progress`` is not used here (:func:`simulate` draws the bar). ``limits``:
     :class:`DerailmentLimits` (default ones)."""
     limits = DerailmentLimits() if limits is None else limits
-    loads = VehicleLoads(vehicle, params.contact, track, resolve_contact_model(contact_model))
-    q0, qdot0 = _start(vehicle, track, params, speed, misalignment, s0, initial, loads.model)
+    loads = VehicleLoads(vehicle, params, track, resolve_contact_model(contact_model))
+    q0, qdot0 = _start(vehicle, params, track, speed, misalignment, s0, initial, loads.model)
     lateral0, _, _, rest_heights = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
     ts = jnp.linspace(0.0, t1, options.n_outputs)
-    sol = _integrate(vehicle, track, params, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
+    sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
                      options.controller()[1], options, limits, solver, adjoint)
     q, qdot = sol.ys
     # a state that only turned non-finite is not derailed: diffrax's event_occurred
     # result makes the status "failed"
     derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, misalignment)
-    return _results(vehicle, track, params, loads.model, q0, qdot0, sol.ts, q, qdot,
+    return _results(vehicle, params, track, loads.model, q0, qdot0, sol.ts, q, qdot,
                     sol.result, derailed, sol.stats["num_steps"],
                     sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
 
 
-def _segment(vehicle, track, params, q0, qdot0, rest_heights, started_derailed, t0, t1, ts,
+def _segment(vehicle, params, track, q0, qdot0, rest_heights, started_derailed, t0, t1, ts,
              dt0, options, limits, solver, contact_model):
     """One segment of a run with a progress bar: from (q0, qdot0) at t0 to t1 [s],
     saved at ``ts`` (the last one is t1). Returns (q, qdot) at ``ts``, diffrax's result
     code, whether the run derailed (or ``started_derailed``), and the steps taken,
     accepted and rejected."""
-    loads = VehicleLoads(vehicle, params.contact, track, contact_model)
-    sol = _integrate(vehicle, track, params, loads, q0, qdot0, rest_heights, t0, t1, ts,
+    loads = VehicleLoads(vehicle, params, track, contact_model)
+    sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t0, t1, ts,
                      dt0, options, limits, solver, None)
     derailed = sol.event_mask[0] | started_derailed
     return (sol.ys, sol.result, derailed, sol.stats["num_steps"],
@@ -374,7 +374,7 @@ def _segment_outputs(n_outputs):
             for i in range(1, n_outputs, per)]
 
 
-def _run_in_segments(timer, vehicle, track, params, t1, q0, qdot0, options, limits,
+def _run_in_segments(timer, vehicle, params, track, t1, q0, qdot0, options, limits,
                      solver, contact_model, misalignment):
     """Integrate segment by segment, drawing the progress bar between them; returns the
     arguments of :func:`_results` after (q0, qdot0)."""
@@ -392,7 +392,7 @@ def _run_in_segments(timer, vehicle, track, params, t1, q0, qdot0, options, limi
     with SimulatedTimeBar(float(t1)) as bar:
         for indices in _segment_outputs(options.n_outputs):
             t_end = ts[indices[-1]]
-            args = (vehicle, track, params, *state, rest_heights, jnp.asarray(started),
+            args = (vehicle, params, track, *state, rest_heights, jnp.asarray(started),
                     jnp.float64(t0),
                     jnp.float64(t_end), jnp.asarray(ts[indices]), jnp.float64(dt0))
             if run_segment is None:
@@ -417,7 +417,7 @@ def _run_in_segments(timer, vehicle, track, params, t1, q0, qdot0, options, limi
             *(jnp.asarray(c) for c in counts))
 
 
-def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: float,
+def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: float,
              misalignment: float = 0.0, s0=None, options: SolverOptions = SolverOptions(),
              limits: DerailmentLimits | None = None, initial=None,
              solver=None, contact_model=None) -> SimulationResult:
@@ -448,12 +448,12 @@ def simulate(vehicle: Vehicle, track, params: VehicleParams, t1: float, speed: f
                             contact_model)
     initial = tuple(jnp.asarray(x, dtype=jnp.float64) for x in initial)
     if options.progress:
-        outputs = _run_in_segments(timer, vehicle, track, params, t1, *initial, options,
+        outputs = _run_in_segments(timer, vehicle, params, track, t1, *initial, options,
                                    limits, solver, contact_model, misalignment)
-        result = timer.run(_results, vehicle, track, params, contact_model, *initial,
+        result = timer.run(_results, vehicle, params, track, contact_model, *initial,
                            *outputs)
     else:
-        result = timer.run(solve, vehicle, track, params, t1, speed, misalignment, s0,
+        result = timer.run(solve, vehicle, params, track, t1, speed, misalignment, s0,
                            options=options, limits=limits, initial=initial, solver=solver,
                            contact_model=contact_model)
     jax.block_until_ready(result)

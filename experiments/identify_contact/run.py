@@ -187,7 +187,7 @@ def batch_check(out: Path, misalignments=(1e-3, 2e-3, 3e-3), duration=0.2):
 
     def member(values, misalignment):
         p = set_values(vehicle, params, FIT, values)
-        result = solve(vehicle, track, p, duration, scenario.speed, misalignment,
+        result = solve(vehicle, p, track, duration, scenario.speed, misalignment,
                        options=options, adjoint=diffrax.RecursiveCheckpointAdjoint(
                            checkpoints=options.max_steps))
         return jnp.sum(result.wheelset_lateral[:, 0] ** 2) * 1e6  # [mm^2]

@@ -37,7 +37,7 @@ def main():
     vehicle, params, track = scenario.build()
     kept = pickle.loads((args.directory / "paper-curve.pkl").read_bytes())
     k = int(np.argmin(np.abs(np.asarray(kept.t) - args.start)))
-    result = simulate(vehicle, track, params, args.duration, scenario.speed,
+    result = simulate(vehicle, params, track, args.duration, scenario.speed,
                       initial=(kept.q[k], kept.qdot[k]),
                       options=SolverOptions(n_outputs=int(args.duration * 200) + 1))
     wheels = result.wheels

@@ -50,7 +50,7 @@ def main():
     def loss(x):
         p = eqx.tree_at(lambda p: (p.contact.stiffness_scale, p.contact.friction), params,
                         (x[0], x[1]))
-        return 1e3 * solve(vehicle, track, p, args.duration, 18.3, 2e-3,
+        return 1e3 * solve(vehicle, p, track, args.duration, 18.3, 2e-3,
                            options=options).wheelset_lateral[-1, 0]
 
     x = jnp.array([1.0, 0.4])

@@ -35,7 +35,7 @@ def main():
     vehicle, params = trailer()
     track = straight_track(args.speed * args.duration + 60.0)
     options = SolverOptions(n_outputs=int(args.duration * 100) + 1, progress=True)
-    result = simulate(vehicle, track, params, args.duration, args.speed, args.misalignment,
+    result = simulate(vehicle, params, track, args.duration, args.speed, args.misalignment,
                       options=options)
     leaves = jax.tree.leaves((result.q, result.qdot, result.wheels))
     lateral = np.asarray(result.wheelset_lateral)

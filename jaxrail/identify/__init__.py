@@ -21,7 +21,7 @@ from ..simulate import SolverOptions, solve
 from .fit import POLISH_ITERATIONS, FitResult, channel_standard_errors, least_squares
 from .measurements import (Measurements, channel_values, check_channels,
                            gaussian_window, read_measurements, sample, write_measurements)
-from .parameters import PARAMETERS, get_values, parameter, set_values
+from ..vehicles.parameters import PARAMETERS, get_values, parameter, set_values
 
 __all__ = ["FitResult", "Identification", "Measurements", "PARAMETERS", "channel_values",
            "get_values", "identify", "least_squares", "parameter", "read_measurements",
@@ -83,7 +83,7 @@ def simulate_channels(vehicle, params, track, channels, times, *, speed, misalig
     cutoff = CUTOFF_FRACTION / period if cutoff is None else cutoff
     options = dataclasses.replace(options, n_outputs=max(options.n_outputs,
                                                          output_count(times, duration)))
-    result = solve(vehicle, track, params, duration, speed, misalignment, s0, options=options,
+    result = solve(vehicle, params, track, duration, speed, misalignment, s0, options=options,
                    adjoint=adjoint, contact_model=contact_model)
     values = channel_values(channels, vehicle, params, track, result, contact_model)
     return sample(result.t, values, jnp.asarray(times), gaussian_window(cutoff))
@@ -196,7 +196,7 @@ def identify(scenario, measurements: Measurements, names, initial=None, bounds=N
     options = scenario.solver_options()
     common = dict(speed=scenario.speed, misalignment=scenario.misalignment,
                   duration=scenario.duration, options=options, cutoff=cutoff,
-                  contact_model=scenario.contact_model(vehicle, contact, progress))
+                  contact_model=scenario.contact_model(vehicle, params, contact, progress))
     residuals, forward = _residual_functions(vehicle, params, track, names, measurements,
                                              common)
     bar = None

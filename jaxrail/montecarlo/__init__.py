@@ -13,7 +13,7 @@ import dataclasses
 
 import numpy as np
 
-from ..identify.parameters import PARAMETERS, get_values
+from ..vehicles.parameters import PARAMETERS, get_values
 from ..scenarios import checks
 from .batch import run_chunks
 from .sampling import DESIGNS, Variation, check_names, draw, parse_variation
@@ -86,8 +86,8 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
         if keep_results:
             kept.append(result)
 
-    model = scenario.contact_model(vehicle, contact, progress)
-    compile_s, run_s, chunk = run_chunks((vehicle, track, params, model), (values, speed, shift),
+    model = scenario.contact_model(vehicle, params, contact, progress)
+    compile_s, run_s, chunk = run_chunks((vehicle, params, track, model), (values, speed, shift),
                                          chunk, devices, progress=progress, on_chunk=collect,
                                          names=names, duration=duration, options=options)
     table = {"sample": np.arange(n), "speed": speed.copy(), "misalignment": shift.copy()}

@@ -2,7 +2,7 @@
 sharded across devices, in chunks.
 
 Every sample has its own speed [m/s], initial misalignment [m] and values of named
-parameters (:mod:`jaxrail.identify.parameters`): the batch is the scenario's
+parameters (:mod:`jaxrail.vehicles.parameters`): the batch is the scenario's
 ``VehicleParams`` with a leading batch axis, written by ``set_values`` inside the
 vmapped function. A chunk of K samples is one call of a compiled program; all chunks
 are padded to K (repeating the last sample, whose copies are dropped), so the program
@@ -31,13 +31,13 @@ import numpy as np
 from jax.sharding import NamedSharding, PartitionSpec
 
 from .._devices import POOL_THREADS, devices_may_stall, pool_threads
-from ..identify.parameters import set_values
+from ..vehicles.parameters import set_values
 from ..simulate import DerailmentLimits, SolverOptions, _compile, solve
 
 AXIS = "batch"
 
 
-def batched_solve(vehicle, track, params, contact, values, speed, misalignment, *, names,
+def batched_solve(vehicle, params, track, contact, values, speed, misalignment, *, names,
                   duration, options: SolverOptions,
                   limits: DerailmentLimits | None = None):
     """:func:`jaxrail.simulate.solve` of every sample: ``values`` (B, len(names)) of the
@@ -47,26 +47,26 @@ def batched_solve(vehicle, track, params, contact, values, speed, misalignment, 
     SimulationResult with a leading batch axis B."""
     def one(v, s, m):
         p = set_values(vehicle, params, names, v) if names else params
-        return solve(vehicle, track, p, duration, s, m, options=options, limits=limits,
+        return solve(vehicle, p, track, duration, s, m, options=options, limits=limits,
                      contact_model=contact)
 
     return jax.vmap(one)(values, speed, misalignment)
 
 
-def _sharded_solve(vehicle, track, params, contact, values, speed, misalignment, *, devices,
+def _sharded_solve(vehicle, params, track, contact, values, speed, misalignment, *, devices,
                    **static):
     """:func:`batched_solve` with the batch split over ``devices`` (a tuple): each
     device runs its rows alone (``jax.shard_map``), the model replicated."""
     if len(devices) == 1:
-        return batched_solve(vehicle, track, params, contact, values, speed, misalignment,
+        return batched_solve(vehicle, params, track, contact, values, speed, misalignment,
                              **static)
-    model, fixed = eqx.partition((vehicle, track, params, contact), eqx.is_array)
+    model, fixed = eqx.partition((vehicle, params, track, contact), eqx.is_array)
     mesh = jax.sharding.Mesh(np.array(devices), (AXIS,))
     rows = PartitionSpec(AXIS)
 
     def local(model, values, speed, misalignment):
-        vehicle, track, params, contact = eqx.combine(model, fixed)
-        return batched_solve(vehicle, track, params, contact, values, speed, misalignment,
+        vehicle, params, track, contact = eqx.combine(model, fixed)
+        return batched_solve(vehicle, params, track, contact, values, speed, misalignment,
                              **static)
 
     return jax.shard_map(local, mesh=mesh, in_specs=(PartitionSpec(), rows, rows, rows),
@@ -108,7 +108,7 @@ def chunk_size(requested, n_samples, n_devices):
 
 
 def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None, **static):
-    """Run :func:`batched_solve` on ``model`` = (vehicle, track, params, contact model) and
+    """Run :func:`batched_solve` on ``model`` = (vehicle, params, track, contact model) and
     ``inputs`` =
     (values, speed, misalignment) host arrays with a common leading axis N, in chunks
     of ``chunk`` rows (the last one padded), sharded over ``devices`` (default: all);

@@ -2,7 +2,7 @@
 
 A :class:`Variation` names one input and its spread. Inputs: ``speed`` [m/s],
 ``misalignment`` [m] (the initial lateral shift of the vehicle to the left) and any
-parameter of :mod:`jaxrail.identify.parameters` (``friction``, ``contact_stiffness``,
+parameter of :mod:`jaxrail.vehicles.parameters` (``friction``, ``contact_stiffness``,
 ``primary_lateral_stiffness``, ...), in that parameter's units.
 
 Spreads, as written on the command line (``NAME=SPREAD``):
@@ -93,7 +93,7 @@ def parse_variation(text: str) -> Variation:
 
 def check_names(names, parameter_names) -> None:
     """ValueError for unknown or repeated input ``names`` (``parameter_names``: the
-    fittable parameters, :data:`jaxrail.identify.PARAMETERS`)."""
+    fittable parameters, :data:`jaxrail.vehicles.parameters.PARAMETERS`)."""
     names = list(names)
     if len(set(names)) != len(names):
         raise ValueError(f"--vary: each input once, got {names}")

@@ -65,10 +65,12 @@ class Scenario:
         steps = int(math.ceil(duration / self.fixed_step - 1e-9))
         return dataclasses.replace(options, fixed_step=self.fixed_step, max_steps=steps + 1)
 
-    def contact_model(self, vehicle, contact=None, progress=False):
+    def contact_model(self, vehicle, params, contact=None, progress=False):
         """The contact model of this scenario (``contact`` overrides its ``[contact]
-        mode``): the paper's search, or its table built or loaded for ``vehicle``."""
-        return contact_model(self.contact if contact is None else contact, vehicle, progress)
+        mode``): the paper's search, or the table of the vehicle's profiles, built or
+        loaded."""
+        return contact_model(self.contact if contact is None else contact, vehicle, params,
+                             progress)
 
     def track(self) -> Track:
         return Track.from_segments([_SEGMENTS[s["kind"]][0](**{k: v for k, v in s.items()
@@ -197,8 +199,8 @@ def run_scenario(scenario: Scenario, duration=None, progress=False, contact=None
     """Build and simulate a scenario: ``(result, vehicle, params, track)``. ``contact``:
     ``"online"`` or ``"table"``, overriding the scenario's ``[contact] mode``."""
     vehicle, params, track = scenario.build()
-    model = scenario.contact_model(vehicle, contact, progress)
+    model = scenario.contact_model(vehicle, params, contact, progress)
     duration = scenario.duration if duration is None else float(duration)
-    result = simulate(vehicle, track, params, duration, scenario.speed, scenario.misalignment,
+    result = simulate(vehicle, params, track, duration, scenario.speed, scenario.misalignment,
                       options=scenario.solver_options(duration, progress), contact_model=model)
     return result, vehicle, params, track

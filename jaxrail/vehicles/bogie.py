@@ -49,7 +49,8 @@ def bogie(wheel=None, rail=None, values=None, config=SearchConfig(),
               for e in primary_bushings(v, k, "frame", x, mass * GRAVITY / 4.0)]
     system, system_params = build_system(bodies + unsprung, joints, forces,
                                          gravity=(0.0, 0.0, -GRAVITY))
-    vehicle = Vehicle("bogie", system, (3, 4), np.array(layout + unsprung_layout), wheel, rail,
-                      float(profile_rail_offset(rail)), config, axleboxes=(1, 2))
+    vehicle = Vehicle("bogie", system, (3, 4), config, axleboxes=(1, 2))
     return vehicle, VehicleParams(system_params,
-                                  ContactParameters() if contact is None else contact)
+                                  ContactParameters() if contact is None else contact,
+                                  wheel, rail, profile_rail_offset(rail),
+                                  np.array(layout + unsprung_layout))

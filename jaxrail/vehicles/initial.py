@@ -36,8 +36,8 @@ def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed, model)
     normal force."""
     position, rotation = wheelset_pose(track, s, lateral, height, roll)
     velocity = speed * rotation[:, 0]
-    spin = (speed / vehicle.nominal_radius) * rotation[:, 1]
-    _, _, patches, forces = wheelset_loads(vehicle, params.contact, track, position, rotation,
+    spin = (speed / params.nominal_radius) * rotation[:, 1]
+    _, _, patches, forces = wheelset_loads(vehicle, params, track, position, rotation,
                                            velocity, spin, model)
     up = track_frame(track, s)[:, 2]
     loads = jnp.sum(forces.force @ up, axis=1)
@@ -81,7 +81,7 @@ def wheelset_rest_pose(vehicle: Vehicle, params: VehicleParams, track, s, latera
             mid = 0.5 * (lo + hi)
             heavy = jnp.sum(loads(frozen[0], mid, roll)[0]) > frozen[4]  # too deep: raise
             return jnp.where(heavy, mid, lo), jnp.where(heavy, hi, mid)
-        r0 = jax.lax.stop_gradient(vehicle.nominal_radius)
+        r0 = jax.lax.stop_gradient(frozen[0].nominal_radius)
         lo, hi = jax.lax.fori_loop(0, HEIGHT_BISECTIONS, bisect, (0.5 * r0, 1.5 * r0))
         return 0.5 * (lo + hi)
 
@@ -117,9 +117,9 @@ def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalig
     All bodies move along the track at ``speed``; the wheelsets spin at ``speed /
     rolling radius``. The state is projected onto the joint constraints.
     """
-    layout = np.asarray(vehicle.layout)
+    layout = params.layout
     if s0 is None:
-        s0 = 5.0 - float(np.min(layout[:, 0]))
+        s0 = 5.0 - jnp.min(layout[:, 0])
     speed = jnp.asarray(speed, dtype=jnp.float64)
     misalignment = jnp.asarray(misalignment, dtype=jnp.float64)
     wheelsets = np.asarray(vehicle.wheelsets)
@@ -127,7 +127,7 @@ def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalig
     load = -jnp.sum(mass) * params.system.gravity[2] / len(wheelsets)
     heights, rolls, radii = jax.vmap(lambda s: wheelset_rest_pose(
         vehicle, params, track, s, misalignment, load, speed, model))(s0 + layout[wheelsets, 0])
-    lift = jnp.mean(heights) - vehicle.nominal_radius
+    lift = jnp.mean(heights) - params.nominal_radius
 
     # per body: its own wheelset (wheelsets and axleboxes), or -1
     carrier = np.full(len(layout), -1)

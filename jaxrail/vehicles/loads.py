@@ -39,10 +39,11 @@ class OnlineContact(eqx.Module):
 
     name = "online"
 
-    def wheelset_patches(self, vehicle: Vehicle, track, position, rotation):
+    def wheelset_patches(self, vehicle: Vehicle, params: VehicleParams, track, position,
+                         rotation):
         """Contact patches ``(2, P)`` of the wheelset at ``position`` (3,) [m] with
         body axes ``rotation`` (3, 3), global."""
-        return search_wheelset(vehicle.wheel, vehicle.rail, track, vehicle.rail_offset,
+        return search_wheelset(params.wheel, params.rail, track, params.rail_offset,
                                position, rotation, vehicle.config)
 
 
@@ -56,26 +57,27 @@ class TableContact(eqx.Module):
     table: ContactTable
     name = "table"
 
-    def wheelset_patches(self, vehicle: Vehicle, track, position, rotation):
+    def wheelset_patches(self, vehicle: Vehicle, params: VehicleParams, track, position,
+                         rotation):
         """Contact patches ``(2, P)`` of the wheelset at ``position`` (3,) [m] with body
         axes ``rotation`` (3, 3), global, from the table."""
         sides = jnp.array([1.0, -1.0])
         return jax.vmap(lambda side: table_patches(
-            self.table, vehicle.wheel, vehicle.rail, track, vehicle.rail_offset, position,
+            self.table, params.wheel, params.rail, track, params.rail_offset, position,
             rotation, side))(sides)
 
 
 CONTACT_MODELS = ("online", "table")
 
 
-def contact_model(name: str, vehicle: Vehicle, progress: bool = False):
-    """The contact model called ``name`` (:data:`CONTACT_MODELS`) for ``vehicle``: the
-    paper's search, or its table (from the cache, or built and cached with a progress
-    bar when ``progress``)."""
+def contact_model(name: str, vehicle: Vehicle, params: VehicleParams, progress: bool = False):
+    """The contact model called ``name`` (:data:`CONTACT_MODELS`) for the vehicle: the
+    paper's search, or the table of its profiles (from the cache, or built and cached
+    with a progress bar when ``progress``)."""
     if name == "online":
         return OnlineContact()
     if name == "table":
-        table, _ = contact_table(vehicle.wheel, vehicle.rail, vehicle.rail_offset,
+        table, _ = contact_table(params.wheel, params.rail, params.rail_offset,
                                  vehicle.config, progress=progress)
         return TableContact(table)
     raise ValueError(f"contact model must be one of {CONTACT_MODELS}, got {name!r}")
@@ -86,18 +88,19 @@ def resolve_contact_model(model):
     return OnlineContact() if model is None else model
 
 
-def wheelset_loads(vehicle: Vehicle, contact: ContactParameters, track, position, rotation,
+def wheelset_loads(vehicle: Vehicle, params: VehicleParams, track, position, rotation,
                    velocity, angular_velocity, model=None):
     """Wheel-rail force (3,) [N] and moment (3,) [N m] about the centre of one wheelset,
     global, with its patches and patch forces: ``(force, moment, patches, forces)``.
     ``model``: the contact model (default :class:`OnlineContact`)."""
-    patches = resolve_contact_model(model).wheelset_patches(vehicle, track, position,
+    patches = resolve_contact_model(model).wheelset_patches(vehicle, params, track, position,
                                                              rotation)
-    force, moment, forces = patch_loads(contact, patches, position, velocity, angular_velocity)
+    force, moment, forces = patch_loads(params.contact, patches, position, velocity,
+                                        angular_velocity)
     return force, moment, patches, forces
 
 
-def contact_loads(vehicle: Vehicle, contact: ContactParameters, track, q, qdot, model=None):
+def contact_loads(vehicle: Vehicle, params: VehicleParams, track, q, qdot, model=None):
     """Wheel-rail loads on all bodies and the contact details.
 
     Returns ``(forces (n, 3) [N], torques (n, 3) [N m], patches, patch_forces)``: the
@@ -106,7 +109,7 @@ def contact_loads(vehicle: Vehicle, contact: ContactParameters, track, q, qdot, 
     ``model``: the contact model (default :class:`OnlineContact`).
     """
     position, rotation, velocity, omega = wheelset_states(vehicle, q, qdot)
-    load = lambda r, a, v, w: wheelset_loads(vehicle, contact, track, r, a, v, w, model)  # noqa: E731
+    load = lambda r, a, v, w: wheelset_loads(vehicle, params, track, r, a, v, w, model)  # noqa: E731
     force, moment, patches, patch_forces = jax.vmap(load)(position, rotation, velocity, omega)
     n = vehicle.system.n_bodies
     index = np.asarray(vehicle.wheelsets)
@@ -152,26 +155,27 @@ class VehicleLoads(eqx.Module):
     :func:`jaxrail.multibody.accelerations`: ``loads(t, q, qdot)`` returns forces and
     torques ``(n, 3)`` [N, N m], global, at the body centres.
 
-    Fields: vehicle, contact (:class:`ContactParameters`, traced), track, model (the
+    Fields: vehicle, params (:class:`VehicleParams`, traced), track, model (the
     contact model).
     """
 
     vehicle: Vehicle
-    contact: ContactParameters
+    params: VehicleParams
     track: object
     model: object = eqx.field(default_factory=OnlineContact)
 
     def __call__(self, t, q, qdot):
-        return contact_loads(self.vehicle, self.contact, self.track, q, qdot, self.model)[:2]
+        return contact_loads(self.vehicle, self.params, self.track, q, qdot, self.model)[:2]
 
     def linearised(self, t, q, qdot):
         """``(forces, torques, bodies, blocks)``: the loads of ``__call__``, the
         wheelset body indices and each wheelset's load Jacobian (W, 7, 14)
         (:func:`wheelset_load_jacobian`), from one contact evaluation."""
-        forces, torques, patches, _ = contact_loads(self.vehicle, self.contact, self.track,
+        forces, torques, patches, _ = contact_loads(self.vehicle, self.params, self.track,
                                                     q, qdot, self.model)
         index = np.asarray(self.vehicle.wheelsets)
-        blocks = jax.vmap(lambda x, a, b, m: wheelset_load_jacobian(self.contact, x, a, b, m))(
+        blocks = jax.vmap(lambda x, a, b, m: wheelset_load_jacobian(self.params.contact, x, a,
+                                                                    b, m))(
             patches, q.reshape(-1, 7)[index], qdot.reshape(-1, 7)[index], torques[index])
         return forces, torques, self.vehicle.wheelsets, blocks
 
@@ -180,5 +184,5 @@ def vehicle_accelerations(vehicle: Vehicle, params: VehicleParams, track, t, q, 
                           model=None):
     """``qddot`` (7 n,) of eq. (19) with gravity, the suspension and the wheel-rail
     loads of ``model`` (default :class:`OnlineContact`)."""
-    loads = VehicleLoads(vehicle, params.contact, track, resolve_contact_model(model))
+    loads = VehicleLoads(vehicle, params, track, resolve_contact_model(model))
     return accelerations(vehicle.system, params.system, t, q, qdot, loads)[0]

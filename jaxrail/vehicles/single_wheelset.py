@@ -60,7 +60,7 @@ def simulate_single_wheelset(wheel, rail, track, rail_offset, speed, lateral, t1
                                    (speed / radius) * rotation[:, 1][None, :])
     options = SolverOptions(rtol=rtol, atol=atol, dt0=1e-4, max_steps=max_steps,
                             n_outputs=n_outputs, integrator=integrator, progress=progress)
-    result = simulate(vehicle, track, params, t1, speed, initial=(q0, qdot0), options=options,
+    result = simulate(vehicle, params, track, t1, speed, initial=(q0, qdot0), options=options,
                       contact_model=contact_model)
     return result, (height, patches)
 
@@ -70,9 +70,9 @@ def single_wheelset(wheel, rail, contact=None, config=SearchConfig(), offset=Non
     :func:`jaxrail.simulate.simulate`: ``(Vehicle, VehicleParams)``. ``offset``: track
     centre to rail profile origin [m] (default :func:`jaxrail.profiles.rail_offset`)."""
     contact = ContactParameters() if contact is None else contact
-    offset = float(rail_offset(rail)) if offset is None else float(offset)
+    offset = rail_offset(rail) if offset is None else offset
     system, params = build_system([RigidBody("wheelset", WHEELSET_MASS, WHEELSET_INERTIA)], [],
                                   [], gravity=(0.0, 0.0, -9.81))
-    vehicle = Vehicle("single wheelset", system, (0,), [(0.0, 0.0, float(wheel.nominal_radius))],
-                      wheel, rail, offset, config)
-    return vehicle, VehicleParams(params, contact)
+    layout = jnp.stack([0.0, 0.0, wheel.nominal_radius])[None, :]
+    return (Vehicle("single wheelset", system, (0,), config),
+            VehicleParams(params, contact, wheel, rail, offset, layout))

@@ -192,8 +192,7 @@ def trailer(wheel=None, rail=None, values=None, config=SearchConfig(),
                 name=f"secondary_{k}_{side}"))
 
     system, system_params = build_system(bodies, joints, forces, gravity=(0.0, 0.0, -GRAVITY))
-    offset = float(profile_rail_offset(rail))
-    vehicle = Vehicle("trailer", system, tuple(range(7, 11)), np.array(layout), wheel, rail,
-                      offset, config, axleboxes=tuple(range(3, 7)))
+    vehicle = Vehicle("trailer", system, tuple(range(7, 11)), config, axleboxes=tuple(range(3, 7)))
     return vehicle, VehicleParams(system_params,
-                                  ContactParameters() if contact is None else contact)
+                                  ContactParameters() if contact is None else contact,
+                                  wheel, rail, profile_rail_offset(rail), np.array(layout))

@@ -1,10 +1,10 @@
 """A rail vehicle: a multibody system some of whose bodies are wheelsets on the track.
 
 :class:`Vehicle` is the static part (the multibody structure, which bodies are
-wheelsets, the wheel and rail profiles, where each body sits in the vehicle when it
-is at rest, the search settings); :class:`VehicleParams` is the pytree of every
-number that may be changed, batched or differentiated without recompiling (masses,
-suspension, contact parameters).
+wheelsets and axleboxes, the search settings); :class:`VehicleParams` is the pytree
+of every number that may be changed, batched or differentiated without recompiling
+(masses, suspension, contact parameters, the wheel and rail profiles, the rail
+offset that sets the gauge, and the layout that sets the wheelbase).
 
 Vehicle frame (used for the nominal layout): x forward, y left, z up, origin on the
 track centreline at the reference point of the vehicle (the carbody centre), z = 0
@@ -15,6 +15,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array, Float
 
 from ..contact.search import SearchConfig
 from ..multibody import System, SystemParams
@@ -24,17 +25,12 @@ from .wheel_rail import ContactParameters
 
 
 class Vehicle(eqx.Module):
-    """Static description of a vehicle.
+    """Static structure of a vehicle: what changing recompiles.
 
     Fields:
         name: label for outputs.
         system: multibody structure (:func:`jaxrail.multibody.build_system`).
         wheelsets: indices of the wheelset bodies, leading first (tuple of ints).
-        layout: n rows (x, y, z), the nominal centre of each body in the vehicle frame [m] at rest
-            (wheelset heights are placeholders: the static equilibrium on the rails
-            sets them, and shifts the sprung bodies with them).
-        wheel, rail: profiles of every wheel and rail.
-        rail_offset: track centre to rail profile origin [m].
         config: contact search settings.
         axleboxes: indices of bodies that ride on the wheelsets (same order as
             ``wheelsets``, or empty): they start at their wheelset's height and roll.
@@ -43,11 +39,6 @@ class Vehicle(eqx.Module):
     name: str = eqx.field(static=True)
     system: System
     wheelsets: tuple[int, ...] = eqx.field(static=True)
-    layout: tuple[tuple[float, float, float], ...] = eqx.field(
-        static=True, converter=lambda x: tuple(tuple(float(v) for v in row) for row in x))
-    wheel: WheelProfile
-    rail: Profile
-    rail_offset: float = eqx.field(static=True)
     config: SearchConfig = eqx.field(static=True, default=SearchConfig())
     axleboxes: tuple[int, ...] = eqx.field(static=True, default=())
 
@@ -55,18 +46,33 @@ class Vehicle(eqx.Module):
     def n_wheelsets(self) -> int:
         return len(self.wheelsets)
 
-    @property
-    def nominal_radius(self):
-        """Nominal wheel radius [m] (an array: the profiles may be traced)."""
-        return self.wheel.nominal_radius
-
 
 class VehicleParams(eqx.Module):
-    """Every number of a vehicle as float64 arrays: ``system`` (masses, inertias,
-    joints, suspension) and ``contact`` (:class:`ContactParameters`)."""
+    """Every number of a vehicle, traced (changing one never recompiles; each can be
+    batched or differentiated).
+
+    Fields:
+        system: masses, inertias, joints, suspension (:class:`jaxrail.multibody.SystemParams`).
+        contact: :class:`ContactParameters`.
+        wheel, rail: profiles of every wheel and rail.
+        rail_offset: track centre to rail profile origin [m] (half the gauge plus the
+            gauge point's distance from the rail profile origin).
+        layout: (n, 3) nominal centre of each body in the vehicle frame [m] at rest
+            (wheelset heights are placeholders: the static equilibrium on the rails
+            sets them, and shifts the sprung bodies with them).
+    """
 
     system: SystemParams
     contact: ContactParameters
+    wheel: WheelProfile
+    rail: Profile
+    rail_offset: Float[Array, ""] = eqx.field(converter=lambda x: jnp.asarray(x, jnp.float64))
+    layout: Float[Array, "n 3"] = eqx.field(converter=lambda x: jnp.asarray(x, jnp.float64))
+
+    @property
+    def nominal_radius(self):
+        """Nominal wheel radius [m]."""
+        return self.wheel.nominal_radius
 
 
 def wheelset_states(vehicle: Vehicle, q, qdot):

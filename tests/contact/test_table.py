@@ -151,9 +151,9 @@ def test_table_mode_gradients_wrt_stiffness_and_friction(geometry_case):
     model = TableContact(table)
 
     def lateral_force(x):
-        contact = eqx.tree_at(lambda c: (c.stiffness_scale, c.friction), params.contact,
-                              (x[0], x[1]))
-        force, _, _, _ = wheelset_loads(vehicle, contact, track, position, rotation, velocity,
+        trial = eqx.tree_at(lambda p: (p.contact.stiffness_scale, p.contact.friction), params,
+                            (x[0], x[1]))
+        force, _, _, _ = wheelset_loads(vehicle, trial, track, position, rotation, velocity,
                                         spin, model)
         return force[1] + 0.1 * force[2]
 

@@ -42,11 +42,11 @@ def test_batch_equals_the_samples_run_one_by_one(batch):
     with the parameters as an argument."""
     import jax
 
-    from jaxrail.identify import set_values
+    from jaxrail.vehicles.parameters import set_values
 
     scenario, (vehicle, params, track), mc = batch
     assert list(mc.table["status"]) == ["successful", "successful", "derailed", "successful"]
-    alone = jax.jit(lambda p, v, m: solve(vehicle, track, p, 0.1, v, m,
+    alone = jax.jit(lambda p, v, m: solve(vehicle, p, track, 0.1, v, m,
                                           options=scenario.solver_options()))
     for i in range(4):
         p = set_values(vehicle, params, ("friction",), np.array([SAMPLES["friction"][i]]))

@@ -4,7 +4,7 @@ each, normal draws with the right moments, grids from lo to hi, bad specs named.
 import numpy as np
 import pytest
 
-from jaxrail.identify import PARAMETERS
+from jaxrail.vehicles.parameters import PARAMETERS
 from jaxrail.montecarlo import Variation, draw, parse_variation
 from jaxrail.montecarlo.sampling import check_names
 

@@ -67,15 +67,15 @@ def trailer():
     from jaxrail.scenarios import load_scenario
 
     vehicle, params, _ = load_scenario("paper-curve").build()
-    return vehicle, params.system
+    return vehicle, params
 
 
-def trailer_states(vehicle):
+def trailer_states(vehicle, params):
     """The nominal layout at rest (every bushing at zero deflection carrying its
     preload: the static equilibrium of the suspension) and a perturbed moving state
     with |p| != 1."""
     n = vehicle.system.n_bodies
-    layout = np.asarray(vehicle.layout)
+    layout = np.asarray(params.layout)
     rest = mb.join_coordinates(layout, np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)))
     rng = np.random.default_rng(7)
     moved = rest + jnp.asarray(1e-2 * rng.normal(size=7 * n))
@@ -128,10 +128,10 @@ def test_lean_solve_without_joints():
 
 
 def test_lean_solve_matches_dense_on_the_trailer(trailer):
-    vehicle, params = trailer
-    system = vehicle.system
+    vehicle, vehicle_params = trailer
+    system, params = vehicle.system, vehicle_params.system
     assert (7 * system.n_bodies, system.n_constraints) == (77, 31)
-    for q, qdot in trailer_states(vehicle):
+    for q, qdot in trailer_states(vehicle, vehicle_params):
         (qddot, lam), (qddot_ref, lam_ref) = both_solves(system, params, q, qdot)
         assert_close(qddot, qddot_ref, SOLVE_RTOL)
         assert_close(lam, lam_ref, SOLVE_RTOL)

@@ -56,7 +56,7 @@ def test_wheelset_load_jacobian_equals_brute_force_ad(straight):
     q, qdot = initial_state(vehicle, params, track, scenario.speed, 0.004, None,
                             OnlineContact())
     _, torques, patches, _ = jax.jit(lambda a, b: contact_loads(
-        vehicle, params.contact, track, a, b))(q, qdot)
+        vehicle, params, track, a, b))(q, qdot)
     k = vehicle.wheelsets[0]
     one = jax.tree.map(lambda x: x[0], patches)
     q_body, qdot_body = q.reshape(-1, 7)[k], qdot.reshape(-1, 7)[k]
@@ -72,7 +72,7 @@ def test_imex_follows_tsit5_on_the_trailer(straight):
     for integrator in ("tsit5", "imex"):
         options = SolverOptions(rtol=scenario.rtol, atol=scenario.atol, n_outputs=401,
                                 integrator=integrator)
-        results[integrator] = simulate(vehicle, track, params, DURATION, scenario.speed,
+        results[integrator] = simulate(vehicle, params, track, DURATION, scenario.speed,
                                        scenario.misalignment, options=options)
     reference, imex = results["tsit5"], results["imex"]
     assert imex.status == "successful" == reference.status

@@ -23,6 +23,7 @@ from jaxrail.results import read_results
 from jaxrail.scenarios import load_scenario
 from jaxrail.simulate import DerailmentLimits, simulate
 from jaxrail.vehicles import read_vehicle_data, trailer, trailer_values
+from jaxrail.vehicles.parameters import set_values
 
 G = 9.81
 CARBODY, BOGIE, UNSPRUNG = 32000.0, 2615.0, 1813.0  # [kg], reference [V-src]
@@ -160,7 +161,7 @@ def test_a_derailment_stops_the_run_and_keeps_the_results_so_far(command_run):
     scenario = load_scenario(SCENARIO)
     vehicle, params, track = scenario.build()
     restart = (first["bodies/q"][start].reshape(-1), first["bodies/qdot"][start].reshape(-1))
-    result = simulate(vehicle, track, params, DURATION, scenario.speed, scenario.misalignment,
+    result = simulate(vehicle, params, track, DURATION, scenario.speed, scenario.misalignment,
                       options=scenario.solver_options(DURATION),
                       limits=DerailmentLimits(lateral=limit), initial=restart)
     assert float(result.compile_time_s) == 0.0  # new limits and start: the command's program
@@ -178,6 +179,21 @@ def test_a_derailment_stops_the_run_and_keeps_the_results_so_far(command_run):
     assert np.max(np.abs(np.asarray(result.wheelset_lateral[:stop]))) <= limit + tolerance
     assert np.max(lateral[start:start + stop + 1]) > limit - tolerance
     assert np.all(np.isnan(np.asarray(result.wheels.normal_force[stop:])))
+
+
+def test_gauge_and_wheelbase_change_without_recompiling(command_run):
+    """The gauge and the wheelbase are numbers of the parameters: a run with others
+    takes the command's program, and its wheelsets sit where the new wheelbase puts them."""
+    scenario = load_scenario(SCENARIO)
+    vehicle, params, track = scenario.build()
+    changed = set_values(vehicle, params, ("track_gauge", "wheelbase"),
+                         np.array([1.440, 2.8]))
+    result = simulate(vehicle, changed, track, 0.05, scenario.speed, scenario.misalignment,
+                      options=scenario.solver_options(DURATION))
+    assert float(result.compile_time_s) == 0.0
+    assert result.status == "successful"
+    x = np.asarray(result.q[0]).reshape(-1, 7)[np.asarray(vehicle.wheelsets), 0]
+    assert np.allclose(-np.diff(x), [2.8, 19.0 - 2.8, 2.8], atol=1e-6)
 
 
 def test_readme_simulation_example_runs(command_run, capsys):

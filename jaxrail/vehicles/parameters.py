@@ -7,7 +7,9 @@ c_e, eq. 17 and the damped Hertz laws). Suspension (every element of the family 
 once, per element): ``primary_longitudinal_stiffness``, ``primary_lateral_stiffness``,
 ``primary_vertical_stiffness`` [N/m], ``primary_vertical_damping`` [N s/m] and the
 ``secondary_*`` ones (lateral and vertical damping too) for vehicles with a secondary
-suspension.
+suspension. Geometry: ``track_gauge`` [m] (moves both rails, keeping the profiles) and
+``wheelbase`` [m] (the axle spacing of each bogie: moves the axles with their axleboxes
+and the primary suspension's seats on the frame; masses and inertias stay).
 """
 
 import dataclasses
@@ -16,7 +18,8 @@ from collections.abc import Callable
 import equinox as eqx
 import jax.numpy as jnp
 
-from ..vehicles.vehicle import Vehicle, VehicleParams
+from ..profiles.measures import gauge_point, rail_offset
+from .vehicle import Vehicle, VehicleParams
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,14 +54,50 @@ def _restitution_set(vehicle, params, value):
                        jnp.asarray(value, jnp.float64))
 
 
-def _bushing_rows(vehicle, family):
-    """Indices of the bushings named ``<family>_...`` in the vehicle's bushing group."""
+def _bushing_group(vehicle, family):
+    """The bushing group and the indices (list) of its bushings named ``<family>_...``."""
     for group in vehicle.system.force_groups:
         if group.kind == "bushing":
             rows = [i for i, name in enumerate(group.names) if name.startswith(family + "_")]
             if rows:
-                return jnp.asarray(rows)
+                return group, rows
     raise ValueError(f"vehicle {vehicle.name!r} has no {family} suspension bushings")
+
+
+def _bushing_rows(vehicle, family):
+    """Indices of the bushings named ``<family>_...`` in the vehicle's bushing group."""
+    return jnp.asarray(_bushing_group(vehicle, family)[1])
+
+
+def _gauge_get(vehicle, params):
+    return 2.0 * (params.rail_offset + gauge_point(params.rail))
+
+
+def _gauge_set(vehicle, params, value):
+    return eqx.tree_at(lambda p: p.rail_offset, params, rail_offset(params.rail, value))
+
+
+def _wheelbase_get(vehicle, params):
+    rows = _bushing_rows(vehicle, "primary")
+    return jnp.mean(2.0 * jnp.abs(params.system.forces["bushing"].point_j[rows, 0]))
+
+
+def _wheelbase_set(vehicle, params, value):
+    """Each primary bushing's seat on its frame (point_j, frame axes) at +-value/2
+    ahead of the frame's centre, and its axlebox and wheelset there in the layout."""
+    group, rows = _bushing_group(vehicle, "primary")
+    if not vehicle.axleboxes:
+        raise ValueError(f"vehicle {vehicle.name!r} has no axleboxes to move")
+    seats = params.system.forces["bushing"].point_j
+    ahead = jnp.sign(seats[jnp.asarray(rows), 0]) * 0.5 * jnp.asarray(value, jnp.float64)
+    layout = params.layout
+    for x, row in zip(ahead, rows):
+        axlebox = group.body_i[row]
+        wheelset = vehicle.wheelsets[vehicle.axleboxes.index(axlebox)]
+        layout = layout.at[jnp.asarray([axlebox, wheelset]), 0].set(
+            layout[group.body_j[row], 0] + x)
+    return eqx.tree_at(lambda p: (p.system.forces["bushing"].point_j, p.layout), params,
+                       (seats.at[jnp.asarray(rows), 0].set(ahead), layout))
 
 
 def _bushing(family, field, column, unit, description):
@@ -85,6 +124,10 @@ PARAMETERS = {p.name: p for p in [
       for family in ("primary", "secondary") for axis, column in _AXES.items()],
     *[_bushing(family, "damping", column, "N s/m", f"{axis} damping")
       for family in ("primary", "secondary") for axis, column in _AXES.items()],
+    Parameter("track_gauge", "m", "distance between the rails' gauge points, 14 mm below "
+              "their tops", _gauge_get, _gauge_set),
+    Parameter("wheelbase", "m", "axle spacing of each bogie", _wheelbase_get,
+              _wheelbase_set),
 ]}
 
 

@@ -1,0 +1,130 @@
+"""Named parameters read and write the right numbers of the parameter pytrees."""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrail.contact.normal import Hertz
+from jaxrail.multibody import join_coordinates
+from jaxrail.multibody.forces import element_deformation
+from jaxrail.track import straight_track
+from jaxrail.vehicles import bogie, trailer, trailer_values, vehicle_accelerations
+from jaxrail.vehicles.parameters import PARAMETERS, get_values, set_values
+from jaxrail.vehicles.wheel_rail import ContactParameters
+
+VALUES = trailer_values()
+
+
+def test_values_are_the_vehicle_data():
+    vehicle, params = trailer()
+    names = ("contact_stiffness", "friction", "restitution", "primary_lateral_stiffness",
+             "primary_vertical_damping", "secondary_lateral_damping",
+             "secondary_vertical_stiffness")
+    expected = [1.0, 0.4, 0.8, VALUES["primary.lateral_stiffness"],
+                VALUES["primary.vertical_damping"], VALUES["secondary.lateral_damping"],
+                VALUES["secondary.vertical_stiffness"]]
+    assert np.allclose(get_values(vehicle, params, names), expected)
+
+
+def test_set_changes_only_its_family_and_column():
+    vehicle, params = trailer()
+    changed = set_values(vehicle, params, ("primary_lateral_stiffness",), jnp.array([1.0e6]))
+    before = params.system.forces["bushing"].stiffness
+    after = changed.system.forces["bushing"].stiffness
+    names = next(g.names for g in vehicle.system.force_groups if g.kind == "bushing")
+    primary = np.array([n.startswith("primary_") for n in names])
+    assert np.all(after[primary, 1] == 1.0e6)
+    assert np.array_equal(np.delete(np.asarray(after), 1, axis=1),
+                          np.delete(np.asarray(before), 1, axis=1))
+    assert np.array_equal(after[~primary], before[~primary])
+
+
+def test_gradient_flows_to_the_set_value():
+    vehicle, params = bogie()
+    names = ("friction", "primary_vertical_damping")
+
+    def f(v):
+        p = set_values(vehicle, params, names, v)
+        return p.contact.friction**2 + jnp.sum(p.system.forces["bushing"].damping[:, 2])
+
+    grad = jax.grad(f)(jnp.array([0.3, 5000.0]))
+    assert np.allclose(grad, [0.6, 4.0])  # the bogie has four primary bushings
+
+
+def test_missing_parameters_are_named():
+    vehicle, params = bogie()
+    with pytest.raises(ValueError, match="no secondary suspension"):
+        get_values(vehicle, params, ("secondary_lateral_stiffness",))
+    with pytest.raises(ValueError, match="unknown parameter 'stiffness'.*contact_stiffness"):
+        get_values(vehicle, params, ("stiffness",))
+    hertz = ContactParameters(normal_law=Hertz())
+    with pytest.raises(ValueError, match="Hertz has no restitution"):
+        get_values(vehicle, eqx.tree_at(lambda p: p.contact, params, hertz), ("restitution",))
+
+
+def test_every_parameter_has_a_unit():
+    assert all(p.unit and p.description for p in PARAMETERS.values())
+
+
+def test_gauge_and_wheelbase_move_the_rails_the_axles_and_their_seats():
+    vehicle, params = trailer()
+    assert np.allclose(get_values(vehicle, params, ("track_gauge", "wheelbase")),
+                       [1.435, 2.0 * VALUES["bogie.semi_wheelbase"]])
+    changed = set_values(vehicle, params, ("track_gauge", "wheelbase"), jnp.array([1.445, 2.9]))
+    # the gauge by brute force: where the rail head is 14 mm below its top, on a 1 um grid
+    y = np.arange(*changed.rail.domain, 1e-6)
+    z = np.asarray(jax.vmap(changed.rail.height)(jnp.asarray(y)))
+    top = np.argmax(z)
+    inside = y[:top][z[:top] >= z[top] - 0.014][0]
+    assert abs(2.0 * (float(changed.rail_offset) + inside) - 1.445) < 4e-6
+    # the axles 2.9 m apart in each bogie, the carbody and frames where they were
+    x = np.asarray(changed.layout[:, 0])
+    assert np.allclose(x[np.asarray(vehicle.wheelsets)], [10.95, 8.05, -8.05, -10.95])
+    assert np.allclose(x[np.asarray(vehicle.axleboxes)], x[np.asarray(vehicle.wheelsets)])
+    assert np.array_equal(x[:3], np.asarray(params.layout[:3, 0]))
+    # at the new layout every primary bushing is undeformed: its seat moved with the axle
+    n = vehicle.system.n_bodies
+    rest = join_coordinates(changed.layout, np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)))
+    rest = np.asarray(rest).reshape(n, 7)
+    bushing = changed.system.forces["bushing"]
+    group = next(g for g in vehicle.system.force_groups if g.kind == "bushing")
+    for k in range(len(group.names)):
+        element = jax.tree.map(lambda a: a[k], bushing)
+        deformation = element_deformation("bushing", rest[group.body_i[k]],
+                                          rest[group.body_j[k]], element)
+        assert np.max(np.abs(np.asarray(deformation))) < 1e-12, group.names[k]
+
+
+def test_gauge_and_wheelbase_gradients_under_jit_and_vmap():
+    """The bogie's accelerations at a displaced state are differentiable in the gauge and
+    the wheelbase (central differences), and vmap over them equals single calls."""
+    vehicle, params = bogie()
+    track = straight_track(30.0)
+    names = ("track_gauge", "wheelbase")
+    n = vehicle.system.n_bodies
+    layout = np.array(params.layout)
+    layout[:, 0] += 10.0
+    layout[np.asarray(vehicle.wheelsets), 1] += 4e-3  # wheel flanges near the right rails
+    layout[np.asarray(vehicle.wheelsets), 2] = float(params.nominal_radius) - 5e-5
+    q = jnp.asarray(join_coordinates(layout, np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))))
+    qdot = jnp.zeros_like(q)
+
+    def lateral(x):
+        """Squared horizontal accelerations: the gauge moves the contact patches, the
+        wheelbase the primary suspension's seats (longitudinal deflection)."""
+        qddot = vehicle_accelerations(vehicle, set_values(vehicle, params, names, x), track,
+                                      0.0, q, qdot)
+        return jnp.sum(qddot.reshape(n, 7)[:, :2] ** 2)
+
+    x = jnp.array([1.437, 2.5])
+    f, grad = jax.jit(jax.value_and_grad(lateral))(x)
+    assert np.isfinite(f) and np.all(np.isfinite(grad)) and np.all(grad != 0.0)
+    evaluate = jax.jit(lateral)
+    for i, h in enumerate((1e-6, 1e-6)):
+        step = h * jnp.eye(2)[i]
+        central = (evaluate(x + step) - evaluate(x - step)) / (2.0 * h)
+        assert abs(float(grad[i]) / float(central) - 1.0) < 1e-4, (i, grad[i], central)
+    batch = jnp.array([[1.437, 2.5], [1.433, 2.7]])
+    assert np.allclose(jax.vmap(evaluate)(batch), [evaluate(b) for b in batch], rtol=1e-12)
