@@ -25,6 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._compiler import compile_function
+from ._lru import LruCache
 from ._progress import SimulatedTimeBar
 from .multibody import constraints, simulate_system
 from .multibody.imex import IMEX
@@ -331,9 +332,12 @@ def _segment(vehicle, params, track, q0, qdot0, rest_heights, started_derailed, 
             sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
 
 
-_compiled = {}
 SEGMENTS = 50
 """A run with a progress bar is integrated in about this many segments."""
+PROGRAMS_KEPT = 32
+"""Compiled programs this process keeps (:func:`_compile`); the least recently used
+one goes first (a paper-curve run with a progress bar uses three)."""
+_compiled = LruCache(PROGRAMS_KEPT)
 
 
 def _compile(function, *args, **kwargs):
@@ -342,13 +346,12 @@ def _compile(function, *args, **kwargs):
     structure and argument shapes; returns (compiled, compile time [s], 0 if it was
     already compiled in this process)."""
     leaves, structure = jax.tree.flatten((args, kwargs))
-    key = (id(function), structure, tuple((x.shape, x.dtype) if eqx.is_array(x) else x
+    key = (function, structure, tuple((x.shape, x.dtype) if eqx.is_array(x) else x
                                       for x in leaves))
-    if key in _compiled:
-        return _compiled[key], 0.0
     start = time.perf_counter()
-    _compiled[key] = compile_function(function, *args, **kwargs)
-    return _compiled[key], time.perf_counter() - start
+    compiled, made = _compiled.get_or_make(
+        key, lambda: compile_function(function, *args, **kwargs))
+    return compiled, (time.perf_counter() - start if made else 0.0)
 
 
 class _Timer:

@@ -16,6 +16,7 @@ import diffrax
 import jax.numpy as jnp
 import numpy as np
 
+from .._lru import LruCache
 from ..scenarios.checks import MAX_OUTPUTS
 from ..simulate import SolverOptions, solve
 from .fit import POLISH_ITERATIONS, FitResult, channel_standard_errors, least_squares
@@ -146,7 +147,10 @@ class Identification:
         return out
 
 
-_residual_cache = {}
+MODELS_KEPT = 8
+"""Models (vehicle, parameters, track, measurements) whose residual functions, and so
+whose compiled fit programs, this process keeps (least recently used first out)."""
+_residual_cache = LruCache(MODELS_KEPT)
 
 
 def _residual_functions(vehicle, params, track, names, measurements, common):
@@ -158,13 +162,15 @@ def _residual_functions(vehicle, params, track, names, measurements, common):
            measurements.time.tobytes(), measurements.noise.tobytes(),
            tuple(sorted((k, v) for k, v in common.items() if k != "contact_model")),
            common.get("contact_model") and common["contact_model"].name)
-    if key not in _residual_cache:
-        functions = tuple(simulation_residuals(vehicle, params, track, names, measurements,
-                                               forward=forward, **common)
-                          for forward in (False, True))
-        # the model is kept with the functions so that its ids stay unique
-        _residual_cache[key] = (functions, (vehicle, params, track))
-    return _residual_cache[key][0]
+
+    def functions():
+        made = tuple(simulation_residuals(vehicle, params, track, names, measurements,
+                                          forward=forward, **common)
+                     for forward in (False, True))
+        # the model is kept with the functions so that its ids stay unique while cached
+        return made, (vehicle, params, track)
+
+    return _residual_cache.get_or_make(key, functions)[0][0]
 
 
 def identify(scenario, measurements: Measurements, names, initial=None, bounds=None,

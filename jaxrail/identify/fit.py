@@ -32,6 +32,7 @@ import numpy as np
 import optax
 
 from .._compiler import compiler_options, use_persistent_cache
+from .._lru import LruCache
 
 
 @dataclasses.dataclass(frozen=True)
@@ -108,7 +109,10 @@ def gauss_newton_covariance(jacobian):
     return covariance, covariance / np.outer(std, std)
 
 
-_COMPILED = {}
+FITS_KEPT = 8
+"""Residual functions whose compiled fit programs this process keeps (least recently
+used first out)."""
+_COMPILED = LruCache(FITS_KEPT)
 ARMIJO = 1e-4  # sufficient decrease of the backtracking line search
 BACKTRACKS = 20  # halvings of the step before the line search gives up
 MAX_STEP = 0.3  # longest step in z: about 30 % in value mid-range
@@ -138,9 +142,6 @@ def _compiled(residuals, method, learning_rate, forward_residuals=None):
     data)`` is r, a forward simulation: the line search's trials and the central
     differences of the uncertainty. Fits that pass the same functions share the
     compiled programs (data and bounds are arguments, not constants)."""
-    key = (residuals, method, learning_rate, forward_residuals)
-    if key in _COMPILED:
-        return _COMPILED[key]
     if method == "lbfgs":
         optimizer = optax.lbfgs(linesearch=None)
     elif method == "adam":
@@ -160,13 +161,16 @@ def _compiled(residuals, method, learning_rate, forward_residuals=None):
         to_values = _transform(*bounds)[0]
         return loss_gradient_jacobian(lambda z: forward_residuals(to_values(z), data), z)
 
-    options = compiler_options()
-    use_persistent_cache()
-    _COMPILED[key] = (optimizer, jax.jit(reverse if forward_residuals is None else forward,
-                                         compiler_options=options),
-                      jax.jit(residuals_z, compiler_options=options),
-                      jax.jit(lambda grad, state, z: optimizer.update(grad, state, z)))
-    return _COMPILED[key]
+    def programs():
+        options = compiler_options()
+        use_persistent_cache()
+        return (optimizer, jax.jit(reverse if forward_residuals is None else forward,
+                                   compiler_options=options),
+                jax.jit(residuals_z, compiler_options=options),
+                jax.jit(lambda grad, state, z: optimizer.update(grad, state, z)))
+
+    key = (residuals, method, learning_rate, forward_residuals)
+    return _COMPILED.get_or_make(key, programs)[0]
 
 
 def jacobian_by_jvp(function, x):
