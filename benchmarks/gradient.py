@@ -37,8 +37,8 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "experiments",
                                 "identify_contact"))
 from run import CHANNELS, FIT, SCENARIO, truth  # noqa: E402
 
-from jaxrail.identify import get_values, simulation_residuals  # noqa: E402
-from jaxrail.identify.fit import loss_gradient_jacobian  # noqa: E402
+from jaxrail.identification import get_values, simulation_residuals  # noqa: E402
+from jaxrail.identification.fit import loss_gradient_jacobian  # noqa: E402
 from jaxrail.scenarios import load_scenario  # noqa: E402
 
 

@@ -32,7 +32,7 @@ def measure(scenario_name, samples, duration, seed, device_counts, sequential, c
     enable_float64()
     from jaxrail.montecarlo import draw, parse_variation, run_samples
     from jaxrail.scenarios import load_scenario
-    from jaxrail.simulate import solve
+    from jaxrail.simulation import solve
 
     scenario = load_scenario(scenario_name)
     built = scenario.build()

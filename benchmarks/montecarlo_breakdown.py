@@ -24,7 +24,7 @@ from jaxrail import enable_float64
 enable_float64()
 
 from jaxrail.scenarios import load_scenario  # noqa: E402
-from jaxrail.simulate import solve  # noqa: E402
+from jaxrail.simulation import solve  # noqa: E402
 from jaxrail.vehicles import initial_state  # noqa: E402
 
 

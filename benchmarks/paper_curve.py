@@ -42,7 +42,7 @@ enable_float64()
 from jaxrail._files import write_atomically  # noqa: E402
 from jaxrail.results import summarize  # noqa: E402
 from jaxrail.scenarios import load_scenario, run_scenario  # noqa: E402
-from jaxrail.simulate import simulate  # noqa: E402
+from jaxrail.simulation import simulate  # noqa: E402
 
 STAGES = {"tsit5": 6, "imex": 8}
 OUTER = 1  # the right wheel is the outer one in the paper's left curve

@@ -91,7 +91,7 @@ def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
 
 def profile_model(model, vehicle, params, track, q, qdot, calls, batch):
     """The JSON object of one contact model. Everything but the structure is traced,
-    as in :func:`jaxrail.simulate.simulate` (the profiles, the track, the parameters
+    as in :func:`jaxrail.simulation.simulate` (the profiles, the track, the parameters
     and the contact table are arguments of the compiled program, not constants)."""
     data, structure = eqx.partition((vehicle, track, params, model), eqx.is_array)
 

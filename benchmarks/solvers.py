@@ -19,7 +19,7 @@ from jaxrail import enable_float64
 
 enable_float64()
 
-from jaxrail.simulate import SolverOptions, simulate  # noqa: E402
+from jaxrail.simulation import SolverOptions, simulate  # noqa: E402
 from jaxrail.track import straight_track  # noqa: E402
 from jaxrail.profiles import s1002, uic60  # noqa: E402
 from jaxrail.vehicles import single_wheelset, trailer  # noqa: E402

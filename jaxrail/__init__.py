@@ -4,7 +4,7 @@ The names a user starts from are here (:data:`__all__`); each is imported from i
 subpackage on first use, so ``import jaxrail`` stays cheap and starts nothing (JAX's
 backend included: ``jax.distributed.initialize`` can still follow it). The functions
 ``simulate`` and ``identify`` share their names with their modules: call
-``jaxrail.simulate.simulate`` and ``jaxrail.identify.identify``.
+``jaxrail.simulation.simulate`` and ``jaxrail.identification.identify``.
 """
 
 import importlib
@@ -16,8 +16,8 @@ from ._float64 import require_float64 as require_float64
 __version__ = "0.1.0"
 
 _LAZY = {
-    "solve": "simulate", "SolverOptions": "simulate",
-    "DerailmentLimits": "simulate", "SimulationResult": "simulate",
+    "simulate": "simulation", "solve": "simulation", "SolverOptions": "simulation",
+    "DerailmentLimits": "simulation", "SimulationResult": "simulation",
     "load_scenario": "scenarios", "parse_scenario": "scenarios", "run_scenario": "scenarios",
     "trailer": "vehicles", "bogie": "vehicles", "single_wheelset": "vehicles",
     "ContactParameters": "vehicles", "contact_model": "vehicles",
@@ -25,7 +25,8 @@ _LAZY = {
     "read_profile": "profiles", "rail_offset": "profiles",
     "Track": "track", "straight_track": "track", "Straight": "track",
     "Transition": "track", "Arc": "track",
-    "Measurements": "identify", "read_measurements": "identify",
+    "identify": "identification", "Measurements": "identification",
+    "read_measurements": "identification",
     "run_montecarlo": "montecarlo", "run_samples": "montecarlo",
     "summarize": "results", "write_results": "results", "read_results": "results",
 }

@@ -178,7 +178,7 @@ def _assignments(text, option, parse=float):
 
 
 def _identify_command(args):
-    from .identify import identify, read_measurements
+    from .identification import identify, read_measurements
     from .scenarios import load_scenario
 
     if args.cutoff is not None and not args.cutoff > 0.0:

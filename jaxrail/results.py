@@ -1,7 +1,7 @@
 """The output side of a run: a JSON summary with a stable schema and a self-describing
 HDF5 results file (docs/results.md describes both).
 
-Both work on an unbatched :class:`jaxrail.simulate.SimulationResult` on the host
+Both work on an unbatched :class:`jaxrail.simulation.SimulationResult` on the host
 (plain NumPy; nothing here is traced). Axes of the per-wheel arrays: time (T),
 wheelset (W, leading first: wheelset 1 of the summary is index 0), wheel (0 = left,
 1 = right, seen in the direction of travel), patch slot (P). Output times after an
@@ -124,7 +124,7 @@ def summarize(result, friction=0.4, flange_angle_threshold=0.6) -> dict:
     values, never NaN). The schema is stable; docs/results.md lists every key.
 
     Arguments:
-        result: an unbatched :class:`jaxrail.simulate.SimulationResult`.
+        result: an unbatched :class:`jaxrail.simulation.SimulationResult`.
         friction: mu [-] for the Nadal limit (use the run's contact friction).
         flange_angle_threshold: contact angle [rad] above which (in magnitude) a patch
             counts as flange contact (0.6 rad ~ 34 deg: between the tread's few degrees

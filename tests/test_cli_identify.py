@@ -9,8 +9,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrail.identify import Identification, Measurements, write_measurements
-from jaxrail.identify.fit import least_squares
+from jaxrail.identification import Identification, Measurements, write_measurements
+from jaxrail.identification.fit import least_squares
 from jaxrail.plots.identification import plot_identification
 
 

@@ -23,10 +23,10 @@ def test_holds_at_most_its_size_and_drops_the_least_recently_used():
 
 
 def test_the_process_caches_are_bounded():
-    from jaxrail import identify, simulate
-    from jaxrail.identify import fit
+    from jaxrail import identification, simulation
+    from jaxrail.identification import fit
 
-    for cache in (simulate._compiled, fit._COMPILED, identify._residual_cache):
+    for cache in (simulation._compiled, fit._COMPILED, identification._residual_cache):
         assert isinstance(cache, LruCache) and 1 <= cache.size <= 32
     with pytest.raises(ValueError, match="size must be >= 1"):
         LruCache(0)

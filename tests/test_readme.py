@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 README = Path(__file__).parents[1] / "README.md"
 EXAMPLES = re.findall(r"```python\n(.*?)```", README.read_text(), re.S)
 
@@ -28,4 +30,18 @@ def test_top_level_names():
     for name in jaxrail.__all__:
         assert getattr(jaxrail, name) is not None, name
     assert jaxrail.run_scenario.__module__ == "jaxrail.scenarios"
-    assert "simulate" not in jaxrail.__all__  # the module's name: jaxrail.simulate.simulate
+    assert jaxrail.simulate.__module__ == "jaxrail.simulation" and callable(jaxrail.simulate)
+    assert jaxrail.identify.__module__ == "jaxrail.identification" and callable(jaxrail.identify)
+
+
+SUBPACKAGES = ("contact", "geometry", "identification", "montecarlo", "multibody", "plots",
+               "profiles", "scenarios", "track", "vehicles")
+
+
+@pytest.mark.parametrize("name", SUBPACKAGES)
+def test_every_subpackage_declares_its_public_names(name):
+    import importlib
+
+    module = importlib.import_module(f"jaxrail.{name}")
+    assert module.__all__ and len(set(module.__all__)) == len(module.__all__)
+    assert all(getattr(module, n, None) is not None for n in module.__all__), name

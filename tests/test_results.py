@@ -25,7 +25,7 @@ from jaxrail.results import (
     write_results,
     write_summary,
 )
-from jaxrail.simulate import SimulationResult, WheelOutputs
+from jaxrail.simulation import SimulationResult, WheelOutputs
 
 T, W, P, N_BODIES = 8, 2, 3, 3
 LEFT, RIGHT = 0, 1

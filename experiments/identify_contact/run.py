@@ -30,13 +30,13 @@ from jaxrail import enable_float64
 
 enable_float64()
 
-from jaxrail.identify.fit import loss_gradient_jacobian  # noqa: E402
-from jaxrail.identify import (Measurements, get_values, identify,  # noqa: E402
+from jaxrail.identification.fit import loss_gradient_jacobian  # noqa: E402
+from jaxrail.identification import (Measurements, get_values, identify,  # noqa: E402
                               set_values, simulate_channels, simulation_residuals,
                               write_measurements)
 from jaxrail.plots.identification import plot_identification  # noqa: E402
 from jaxrail.scenarios import load_scenario  # noqa: E402
-from jaxrail.simulate import solve  # noqa: E402
+from jaxrail.simulation import solve  # noqa: E402
 
 SCENARIO = "bogie-curve-entry"
 CHANNELS = {  # channel: noise standard deviation (realistic sensor scatter)

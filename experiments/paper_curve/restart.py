@@ -21,7 +21,7 @@ enable_float64()
 
 import jaxrail.vehicles.wheel_rail as wheel_rail  # noqa: E402
 from jaxrail.scenarios import load_scenario  # noqa: E402
-from jaxrail.simulate import SolverOptions, simulate  # noqa: E402
+from jaxrail.simulation import SolverOptions, simulate  # noqa: E402
 
 
 def main():

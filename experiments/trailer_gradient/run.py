@@ -22,7 +22,7 @@ from jaxrail import enable_float64
 
 enable_float64()
 
-from jaxrail.simulate import SolverOptions, solve  # noqa: E402
+from jaxrail.simulation import SolverOptions, solve  # noqa: E402
 from jaxrail.track import straight_track  # noqa: E402
 from jaxrail.vehicles import trailer  # noqa: E402
 

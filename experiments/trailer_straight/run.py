@@ -18,7 +18,7 @@ from jaxrail import enable_float64
 enable_float64()
 
 from jaxrail.plots.simulation import plot_wheelsets  # noqa: E402
-from jaxrail.simulate import SolverOptions, simulate  # noqa: E402
+from jaxrail.simulation import SolverOptions, simulate  # noqa: E402
 from jaxrail.track import straight_track  # noqa: E402
 from jaxrail.vehicles import trailer  # noqa: E402
 

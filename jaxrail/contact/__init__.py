@@ -34,3 +34,11 @@ from .table import TableGrid as TableGrid
 from .table import build_contact_table as build_contact_table
 from .table import table_patches as table_patches
 from .table_cache import contact_table as contact_table
+
+__all__ = ["build_contact_table", "contact_table", "ContactPatches", "ContactTable",
+           "convex_curvature", "creepages", "deepest_depth", "Eq17", "Flores", "Hertz",
+           "hertz", "hertz_coefficients", "hertz_from_curvatures", "hertz_stiffness",
+           "HertzCoefficients", "HertzContact", "HuntCrossley", "kalker_coefficients",
+           "LankaraniNikravesh", "NormalLaw", "polach", "PolachParameters",
+           "search_vehicle", "search_wheel", "search_wheelset", "SearchConfig",
+           "table_patches", "TableGrid", "wheelset_pose"]

@@ -32,7 +32,7 @@ from jax.sharding import NamedSharding, PartitionSpec
 
 from .._devices import POOL_THREADS, devices_may_stall, pool_threads
 from ..vehicles.parameters import set_values
-from ..simulate import DerailmentLimits, SolverOptions, _compile, solve
+from ..simulation import DerailmentLimits, SolverOptions, _compile, solve
 
 AXIS = "batch"
 
@@ -40,10 +40,10 @@ AXIS = "batch"
 def batched_solve(vehicle, params, track, contact, values, speed, misalignment, *, names,
                   duration, options: SolverOptions,
                   limits: DerailmentLimits | None = None):
-    """:func:`jaxrail.simulate.solve` of every sample: ``values`` (B, len(names)) of the
+    """:func:`jaxrail.simulation.solve` of every sample: ``values`` (B, len(names)) of the
     named parameters, ``speed`` (B,) [m/s], ``misalignment`` (B,) [m]; everything else
     shared, ``contact`` the contact model (:mod:`jaxrail.vehicles.loads`), ``limits``
-    the :class:`~jaxrail.simulate.DerailmentLimits` (default ones). Returns a
+    the :class:`~jaxrail.simulation.DerailmentLimits` (default ones). Returns a
     SimulationResult with a leading batch axis B."""
     def one(v, s, m):
         p = set_values(vehicle, params, names, v) if names else params
@@ -114,7 +114,7 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
     of ``chunk`` rows (the last one padded), sharded over ``devices`` (default: all);
     ``static``: names, duration, options, limits. ``on_chunk(start, stop, result)``
     receives each chunk's host result without the padding. The compiled program is
-    cached per structure, options and chunk (:func:`jaxrail.simulate.simulate`'s
+    cached per structure, options and chunk (:func:`jaxrail.simulation.simulate`'s
     cache): a second study of the same vehicle does not recompile. Returns (compile
     time [s], 0 if cached; run time [s]; the chunk used, :func:`chunk_size`)."""
     devices = tuple(jax.devices() if devices is None else devices)

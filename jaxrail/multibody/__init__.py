@@ -45,3 +45,14 @@ from .system import potential_energy as potential_energy
 from .system import quadratic_velocity as quadratic_velocity
 from .system import rhs as rhs
 from .system import simulate_system as simulate_system
+
+__all__ = ["acceleration_response", "accelerations", "accelerations_dense",
+           "angular_momentum", "angular_velocity", "body_pose", "BodyParams",
+           "build_system", "BumpStop", "BumpStopParams", "Bushing", "BushingParams",
+           "consistent_initial_conditions", "constraint_violation", "constraints",
+           "Fixed", "generalized_forces", "GROUND", "join_coordinates", "JointParams",
+           "kinetic_energy", "mass_matrix", "point_position", "point_velocity",
+           "potential_energy", "Prismatic", "quadratic_velocity", "quaternion",
+           "Revolute", "rhs", "RigidBody", "simulate_system", "Spherical",
+           "split_coordinates", "SpringDamper", "SpringDamperParams", "System",
+           "SystemParams", "velocities_from_twists"]

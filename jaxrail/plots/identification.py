@@ -1,11 +1,11 @@
-"""Figure of a fit (:func:`jaxrail.identify.identify`): the loss per iteration, each
+"""Figure of a fit (:func:`jaxrail.identification.identify`): the loss per iteration, each
 parameter's trajectory relative to its initial value (and to a known truth, for
 synthetic studies), and every measured channel against the fitted simulation."""
 
 import numpy as np
 
 from ._figure import subplots
-from ..identify.measurements import UNITS
+from ..identification.measurements import UNITS
 from .profiles import save_figure
 
 

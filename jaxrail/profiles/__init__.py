@@ -22,3 +22,9 @@ from .tabulated import tabulated_rail as tabulated_rail
 from .tabulated import tabulated_wheel as tabulated_wheel
 from .uic60 import UIC60 as UIC60
 from .uic60 import uic60 as uic60
+
+__all__ = ["flange_angle", "flange_height", "flange_qr", "flange_thickness",
+           "gauge_point", "highest_point", "Profile", "rail_offset", "read_profile",
+           "S1002", "s1002", "sample_profile", "simplified_s1002", "SimplifiedFlange",
+           "SimplifiedTread", "tabulated_rail", "tabulated_wheel", "TabulatedProfile",
+           "UIC60", "uic60", "WheelProfile", "write_profile_csv"]

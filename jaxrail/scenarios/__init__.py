@@ -18,10 +18,12 @@ import equinox as eqx
 
 from ..profiles.named import named_profile
 from . import checks
-from ..simulate import INTEGRATORS, SolverOptions, simulate
+from ..simulation import INTEGRATORS, SolverOptions, simulate
 from ..track import Arc, Straight, Track, Transition
 from ..vehicles import CONTACT_MODELS, bogie, contact_model, single_wheelset, trailer
 from ..vehicles.trailer import trailer_values
+
+__all__ = ["BUILTIN", "Scenario", "load_scenario", "parse_scenario", "run_scenario"]
 
 BUILTIN = ("paper-curve", "paper-curve-simplified", "straight", "bogie-curve-entry")
 _SEGMENTS = {"straight": (Straight, {"length"}),

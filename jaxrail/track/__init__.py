@@ -23,3 +23,8 @@ from .layout import straight_track as straight_track
 from .projection import from_track_coordinates as from_track_coordinates
 from .projection import project as project
 from .projection import to_track_coordinates as to_track_coordinates
+
+__all__ = ["Arc", "cant_angle", "centreline_position", "curvature", "curve_layout",
+           "from_track_coordinates", "heading", "project", "rail_frame", "rail_point",
+           "Straight", "straight_track", "superelevation", "to_track_coordinates",
+           "Track", "track_frame", "Transition"]

@@ -25,3 +25,16 @@ from .wheel_rail import ContactParameters as ContactParameters
 from .wheel_rail import PatchForces as PatchForces
 from .wheel_rail import patch_loads as patch_loads
 from .wheel_rail import wheelset_contact_loads as wheelset_contact_loads
+from .parameters import PARAMETERS as PARAMETERS
+from .parameters import get_values as get_values
+from .parameters import parameter as parameter
+from .parameters import set_values as set_values
+
+__all__ = ["bogie", "contact_loads", "contact_model", "CONTACT_MODELS",
+           "ContactParameters", "get_values", "initial_state", "OnlineContact",
+           "parameter", "PARAMETERS", "patch_loads", "PatchForces",
+           "read_vehicle_data", "set_values", "simulate_single_wheelset",
+           "single_wheelset", "static_loads", "TableContact", "touching_height",
+           "trailer", "trailer_values", "Vehicle", "vehicle_accelerations",
+           "VehicleLoads", "VehicleParams", "wheelset_contact_loads", "wheelset_loads",
+           "wheelset_rest_pose"]

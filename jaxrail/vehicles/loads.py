@@ -1,6 +1,6 @@
 """The loads on a vehicle's bodies: the one place where the right-hand side is assembled.
 
-Every user of the equations of motion (:mod:`jaxrail.simulate`, the static
+Every user of the equations of motion (:mod:`jaxrail.simulation`, the static
 equilibrium, identification, Monte Carlo, the benchmarks) goes through
 :class:`VehicleLoads` and :func:`vehicle_accelerations`, so the right-hand side is
 written once:

@@ -1,5 +1,5 @@
 """A single free wheelset on the track: one rigid body of :mod:`jaxrail.multibody`
-under gravity and the wheel-rail loads, simulated by :func:`jaxrail.simulate.simulate`.
+under gravity and the wheel-rail loads, simulated by :func:`jaxrail.simulation.simulate`.
 
 For tests and studies (Klingel's kinematic hunting, contact dynamics). Mass data: the
 Manchester benchmark wheelset, 1813 kg [V-src]; inertias Ixx = Izz = 1120, Iyy = 112
@@ -38,17 +38,17 @@ def simulate_single_wheelset(wheel, rail, track, rail_offset, speed, lateral, t1
                              config=SearchConfig(), rtol=1e-6, atol=1e-9, max_steps=400_000,
                              contact_model=None, integrator="tsit5", progress=False):
     """Roll a free wheelset along the track from arc length ``s0`` [m] with
-    :func:`jaxrail.simulate.simulate`.
+    :func:`jaxrail.simulation.simulate`.
 
     It starts at the touching height, shifted by ``lateral`` [m] (positive left), moving
     at ``speed`` [m/s] and spinning at ``speed / rolling radius`` of the centred contact,
     and runs for ``t1`` [s] with ``n_outputs`` equally spaced outputs, Tsit5 and the PID
     controller (``rtol``, ``atol``). ``contact``: :class:`ContactParameters` (default
     ones). ``progress``: show the progress bar. Returns ``(result, (height, patches))``: the
-    :class:`jaxrail.simulate.SimulationResult` and the centred touching height [m] and
+    :class:`jaxrail.simulation.SimulationResult` and the centred touching height [m] and
     patches.
     """
-    from ..simulate import SolverOptions, simulate
+    from ..simulation import SolverOptions, simulate
 
     contact = ContactParameters() if contact is None else contact
     height, patches = touching_height(wheel, rail, track, rail_offset, s0, config)
@@ -67,7 +67,7 @@ def simulate_single_wheelset(wheel, rail, track, rail_offset, speed, lateral, t1
 
 def single_wheelset(wheel, rail, contact=None, config=SearchConfig(), offset=None):
     """A free wheelset as a :class:`Vehicle` (one body, no suspension) for
-    :func:`jaxrail.simulate.simulate`: ``(Vehicle, VehicleParams)``. ``offset``: track
+    :func:`jaxrail.simulation.simulate`: ``(Vehicle, VehicleParams)``. ``offset``: track
     centre to rail profile origin [m] (default :func:`jaxrail.profiles.rail_offset`)."""
     contact = ContactParameters() if contact is None else contact
     offset = rail_offset(rail) if offset is None else offset

@@ -21,7 +21,7 @@ from jaxrail._devices import host_device_environment
 from jaxrail.montecarlo import run_samples
 from jaxrail.results import summarize
 from jaxrail.scenarios import parse_scenario
-from jaxrail.simulate import solve
+from jaxrail.simulation import solve
 
 SCENARIO = (Path(__file__).parents[1] / "data" / "wheelset-straight.toml").read_text()
 SAMPLES = {"speed": [5.0, 10.0, 15.0, 12.0], "misalignment": [1e-3, 2e-3, 0.05, 3e-3],

@@ -17,7 +17,7 @@ import pytest
 from jaxrail.multibody import quaternion as qt
 from jaxrail.multibody.forces import body_torque
 from jaxrail.scenarios import load_scenario
-from jaxrail.simulate import SolverOptions, simulate
+from jaxrail.simulation import SolverOptions, simulate
 from jaxrail.vehicles.initial import initial_state
 from jaxrail.vehicles.loads import OnlineContact, contact_loads, wheelset_load_jacobian
 from jaxrail.vehicles.wheel_rail import patch_loads

@@ -1,5 +1,5 @@
 """A free coned wheelset (multibody + contact search + Hertz + eq. 17 + Polach, run by
-jaxrail.simulate) hunts with Klingel's kinematic wavelength 2 pi sqrt(r0 e / tan(gamma)) at low speed."""
+jaxrail.simulation) hunts with Klingel's kinematic wavelength 2 pi sqrt(r0 e / tan(gamma)) at low speed."""
 
 import numpy as np
 import pytest

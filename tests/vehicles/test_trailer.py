@@ -21,7 +21,7 @@ from jaxrail.cli import main
 from jaxrail.multibody.forces import element_deformation
 from jaxrail.results import read_results
 from jaxrail.scenarios import load_scenario
-from jaxrail.simulate import DerailmentLimits, simulate
+from jaxrail.simulation import DerailmentLimits, simulate
 from jaxrail.vehicles import read_vehicle_data, trailer, trailer_values
 from jaxrail.vehicles.parameters import set_values
 

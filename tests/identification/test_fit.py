@@ -1,4 +1,4 @@
-"""Least squares in bounded log space (jaxrail.identify.fit) on models with a known
+"""Least squares in bounded log space (jaxrail.identification.fit) on models with a known
 answer: the fit recovers the truth, and the Gauss-Newton standard errors match the
 scatter of repeated noisy fits (an independent Monte Carlo estimate)."""
 
@@ -7,7 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrail.identify.fit import gauss_newton_covariance, least_squares
+from jaxrail.identification.fit import gauss_newton_covariance, least_squares
 
 T = jnp.linspace(0.0, 2.0, 50)
 TRUTH = np.array([2.0, 1.5])  # amplitude [-], decay rate [1/s]
@@ -42,7 +42,7 @@ def test_forward_mode_gradient_follows_the_reverse_mode_path():
     assert len(fits[0].loss_history) == len(fits[1].loss_history)
     assert np.allclose(fits[0].value_history, fits[1].value_history, rtol=1e-9)
 
-    from jaxrail.identify.fit import _compiled, _transform
+    from jaxrail.identification.fit import _compiled, _transform
     bounds = (jnp.asarray(TRUTH / 10), jnp.asarray(TRUTH * 10))
     _, gradient, residuals_z, _ = _compiled(decay_residuals, "lbfgs", 0.1, decay_residuals)
     z = _transform(*bounds)[1](jnp.asarray(start))

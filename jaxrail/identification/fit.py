@@ -19,7 +19,7 @@ On such a loss the optax iterations stop in one of the ripple's local minima, an
 the ripple's slope outweighs the bowl's: the scatter of the fitted values then far
 exceeds any standard error. The fit therefore ends with a few Gauss-Newton steps with
 that central-difference Jacobian, which see the bowl and not the ripple; they stop
-when a step is below ``POLISH_TOLERANCE`` standard errors (tests/identify/test_fit.py
+when a step is below ``POLISH_TOLERANCE`` standard errors (tests/identification/test_fit.py
 checks the errors against the scatter of repeated fits of a rough model).
 """
 
@@ -127,7 +127,7 @@ DECREMENT = 1e-4
 JACOBIAN_STEP = 1e-2
 POLISH_ITERATIONS = 6  # most Gauss-Newton steps at the end of a fit
 # [standard errors] a Gauss-Newton step this short has converged: on a rough loss the
-# steps settle at about a tenth of a standard error (tests/identify/test_fit.py)
+# steps settle at about a tenth of a standard error (tests/identification/test_fit.py)
 POLISH_TOLERANCE = 0.2
 # Rise of the loss a Gauss-Newton step may take: 0.5, what moving one parameter by one
 # standard error costs, about the ripple of a rough loss.

@@ -4,7 +4,7 @@ CSV file that holds them.
 Channels (k counts wheelsets from 1, leading first; side is ``left`` or ``right``):
 
 - ``wheelset_lateral_k`` [m], ``wheelset_vertical_k`` [m], ``wheelset_yaw_k`` [rad]:
-  the wheelset relative to the track (:class:`jaxrail.simulate.SimulationResult`);
+  the wheelset relative to the track (:class:`jaxrail.simulation.SimulationResult`);
 - ``wheel_lateral_force_k_side``, ``wheel_vertical_force_k_side`` [N]: the rail's
   force on the wheel in the track frame (Y, Q of an instrumented wheelset; lateral
   positive towards the wheel's own field side);

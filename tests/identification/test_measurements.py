@@ -5,8 +5,8 @@ vehicle."""
 import numpy as np
 import pytest
 
-from jaxrail.identify import Measurements, read_measurements, write_measurements
-from jaxrail.identify.measurements import (check_channels, gaussian_window, sample,
+from jaxrail.identification import Measurements, read_measurements, write_measurements
+from jaxrail.identification.measurements import (check_channels, gaussian_window, sample,
                                           triangular_window)
 from jaxrail.vehicles import bogie
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from .._lru import LruCache
 from ..scenarios.checks import MAX_OUTPUTS
-from ..simulate import SolverOptions, solve
+from ..simulation import SolverOptions, solve
 from .fit import POLISH_ITERATIONS, FitResult, channel_standard_errors, least_squares
 from .measurements import (Measurements, channel_values, check_channels,
                            gaussian_window, read_measurements, sample, write_measurements)
