@@ -7,9 +7,8 @@ of its threads while it runs. A batched LAPACK call (the LU of every member's
 equations of motion) splits its batch over the same pool and waits for it
 (``jax::ParallelBatchMap``). With two devices on two cores each program waits for a
 thread the other holds: one device stalls until the other's program ends, or both wait
-forever (seen here with gdb: both pool threads inside ``ParallelBatchMap`` under
-LAPACK's ``getrf``; reproduced by a sharded loop of batched solves, which hangs at
-once with a 2-thread pool and runs with 4). A pool of one thread per core plus one per
+forever (``tests/montecarlo/test_devices.py``: a sharded loop of batched solves hangs
+at once with a 2-thread pool and runs with 4; docs/montecarlo.md). A pool of one thread per core plus one per
 device leaves threads free for the batched kernels. ``--xla_cpu_multi_thread_eigen=false``
 (Eigen's own kernels single-threaded) is set too; on its own it does not prevent the
 hang.

@@ -40,7 +40,7 @@ grid in x of step log(10)/230 with the table ends x = +-log 10 on nodes, for
 0 to rounding and c = c_asym(x, nu) exactly. c_asym is algebraic in a/b, so what is
 left is 1 logarithm of a/b, 3 logarithms and 3 exponentials. C1 in a/b (the Hermite
 interpolant's second derivative jumps at the nodes, by ~1e-6 relative) and within
-1e-6 relative of ``method="direct"`` (the evaluation above, which stays the reference)
+1e-6 relative of ``method="direct"`` (the evaluation above, the reference)
 for all a/b > 0 and 0 <= nu <= 0.5 (tests/contact/test_kalker_table.py).
 """
 

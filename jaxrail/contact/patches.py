@@ -238,11 +238,11 @@ def secant_curvature(depth_fn, y, domain, span: float = SECANT_SPAN):
     ``-d''`` from the depth at three points ``span`` apart around ``y``, the stencil
     shifted (and, on a surface narrower than ``2 span``, shrunk) to stay in ``domain``.
 
-    For a narrow patch this replaces the sum of the two profile curvatures at one point.
-    The UIC60 head is made of arcs (R300, R80, R13) whose curvatures jump at the
-    junctions: a contact point crossing one changed the Hertz stiffness by a factor 2.5
-    at once. The depth is continuously differentiable there, and its second difference
-    over the span changes continuously instead, spreading the jump over 2 ``span``."""
+    For a narrow patch this stands in for the sum of the two profile curvatures at one
+    point. The UIC60 head is made of arcs (R300, R80, R13) whose curvatures jump at the
+    junctions, so that sum changes the Hertz stiffness by up to a factor 2.5 as a contact
+    point crosses one. The depth is continuously differentiable there, and its second
+    difference over the span changes continuously, spreading the jump over 2 ``span``."""
     half_width = 0.5 * (domain[1] - domain[0])
     span = jnp.minimum(span, 0.5 * half_width)
     centre = jnp.clip(y, domain[0] + span, domain[1] - span)
@@ -273,7 +273,7 @@ def refine_maximum(depth_fn, y_grid: Float[Array, " n"], depth: Float[Array, " n
 
     # Newton steps from central-difference parabolas on a much finer spacing: the same
     # steps as Newton with exact derivatives up to O(probe^2), without nesting autodiff
-    # through the strip geometry (which made compilation slow).
+    # through the strip geometry (which is slow to compile).
     probe = 0.05 * spacing
 
     def newton(y, _):

@@ -104,7 +104,7 @@ class ContactTable(eqx.Module):
     fields of :data:`FIELDS` per patch slot at each approach level, and in the last slot
     the wheel's vertical position at that level (first field). Kept as ``rows``, one
     row per (side, lateral, yaw, roll) node, so that a lookup gathers whole rows from
-    the array as it is (a reshape of a traced table inside the integrator's loop made
+    the array as it is (reshaping a traced table inside the integrator's loop makes
     XLA:CPU's loop emitters slow); ``values`` gives them back in their shape.
 
     Fields:

@@ -119,8 +119,8 @@ MAX_STEP = 0.3  # longest step in z: about 30 % in value mid-range
 # L-BFGS stops when the decrease of the loss that its model predicts is below this. The
 # loss is 0.5 chi^2, which rises by 0.5 when a parameter moves by one standard error:
 # 1e-4 of that is far below any statistical meaning (in the study, 0.04 % of the
-# stiffness), and 1e-6 kept the noise-free fit zig-zagging in its valley for 3 minutes
-# an iteration.
+# stiffness); a smaller threshold only lets the fit zig-zag along its valley, at minutes
+# per iteration.
 DECREMENT = 1e-4
 # Central-difference step in log v of the Jacobian of the uncertainty: 1 %, above the
 # roughness of impact dynamics (0.1 % in the study) and below any useful uncertainty.

@@ -77,9 +77,9 @@ class PatchForces(eqx.Module):
 # Floor on the Hertz curvature ratio B/A at a wheel-rail patch, a guard. The lateral
 # curvature sum is the patch's ``curvature_contact_y``: the gap's secant curvature over
 # +-1 mm for narrow patches, the overlap curvature for wide ones, which stays positive
-# where the S1002 throat conforms to the UIC60 gauge corner (with the profile curvatures
-# there and a 1e-3 floor, the stiffness jumped 25-fold over 4 mm of profile and threw the
-# leading wheelset off the rails in the paper's curve). The floor catches narrow
+# where the S1002 throat conforms to the UIC60 gauge corner (there the profile curvatures
+# with a 1e-3 floor make the stiffness jump 25-fold over 4 mm of profile, enough to
+# derail the leading wheelset in the paper's curve). The floor catches narrow
 # patches where the gap is concave (small second patches sharing a run on the S1002
 # tread, B/A 0.02-0.6); 0.3 lies below the flange root (15) and flange (106-133):
 # docs/normal-forces.md.
