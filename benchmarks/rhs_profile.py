@@ -93,27 +93,27 @@ def profile_model(model, vehicle, params, track, q, qdot, calls, batch):
     """The JSON object of one contact model. Everything but the structure is traced,
     as in :func:`jaxrail.simulation.simulate` (the profiles, the track, the parameters
     and the contact table are arguments of the compiled program, not constants)."""
-    data, structure = eqx.partition((vehicle, track, params, model), eqx.is_array)
+    data, structure = eqx.partition((vehicle, params, track, model), eqx.is_array)
 
     def parts_of(function):
         return lambda q, qdot, data: function(q, qdot, *eqx.combine(data, structure))
 
     @parts_of
-    def contact(q, qdot, vehicle, track, params, model):
+    def contact(q, qdot, vehicle, params, track, model):
         position, rotation, _, _ = wheelset_states(vehicle, q, qdot)
         return jax.vmap(lambda r, a: model.wheelset_patches(vehicle, params, track, r, a))(
             position, rotation)
 
     @parts_of
-    def loads(q, qdot, vehicle, track, params, model):
+    def loads(q, qdot, vehicle, params, track, model):
         return contact_loads(vehicle, params, track, q, qdot, model)[:2]
 
     @parts_of
-    def multibody(q, qdot, vehicle, track, params, model):
+    def multibody(q, qdot, vehicle, params, track, model):
         return accelerations(vehicle.system, params.system, 0.0, q, qdot)[0]
 
     @parts_of
-    def rhs(q, qdot, vehicle, track, params, model):
+    def rhs(q, qdot, vehicle, params, track, model):
         return vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model)
 
     args = (q, qdot, data)
