@@ -35,6 +35,12 @@ def measured(tmp_path):
     (("--fit", "friction", "--bounds", "friction=0.1"), "--bounds: expected name=lower:upper"),
     (("--fit", "friction", "--initial", "contact_stiffness=2"), "not fitted"),
     (("--fit", "friction", "--cutoff", "0"), "--cutoff must be > 0 Hz"),
+    (("--fit", "friction", "--initial", "friction=-1"),
+     "initial value: friction must be within [0.01, 1.5] -, got -1.0"),
+    (("--fit", "friction", "--bounds", "friction=0.5:0.1"),
+     "bounds: friction needs 0 < lo < hi, got (0.5, 0.1)"),
+    (("--fit", "friction", "--initial", "friction=0.9", "--bounds", "friction=0.1:0.5"),
+     "the initial friction 0.9 lies outside its bounds [0.1, 0.5]"),
 ])
 def test_bad_arguments_are_named(measured, args, message):
     done = run("bogie-curve-entry", "--measured", str(measured), *args)

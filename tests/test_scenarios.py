@@ -95,7 +95,71 @@ BAD_INPUTS = [
     (("duration = 1.0\n[solver]", "duration = 3600.0\n[solver]\noutput_rate = 1e5"),
      "is 360000001 output times (the trailer's results alone 1.37e+03 GB); at most 200001"),
     (("[solver]", '[solver]\nintegrator = "rk4"'), "[solver] integrator must be one of"),
+    # siblings of the cases above
+    (("[track]", "[contact]\nfriction = -0.3\n[track]"),
+     "[contact] friction must be within [0.01, 1.5] -, got -0.3"),
+    (("[track]", "[contact]\nfriction = 0\n[track]"),
+     "[contact] friction must be within [0.01, 1.5] -, got 0.0"),
+    (("[track]", "[contact]\nrestitution = 2.0\n[track]"),
+     "unknown key 'restitution' in [contact]"),
+    (("[track]", "[contact]\nmode = 1\n[track]"), "[contact] mode must be a string, got 1"),
+    (('[{ kind = "straight", length = 100.0 }]', ARC.replace("300.0", "0.0")),
+     "track segment 1: radius must be within [10, 1e+07] m, got 0.0"),
+    (('[{ kind = "straight", length = 100.0 }]', ARC.replace("300.0", "-300.0")),
+     "track segment 1: radius must be within [10, 1e+07] m, got -300.0"),
+    (('[{ kind = "straight", length = 100.0 }]', ARC.replace("0.1 }", "0.5 }")),
+     "track segment 1: cant must be within [-0.2, 0.2] m, got 0.5"),
+    (("length = 100.0", "length = -5.0"),
+     "track segment 1: length must be within [0.001, 100000] m, got -5.0"),
+    (('[{ kind = "straight", length = 100.0 }]', "[]"),
+     "[track] segments must be a non-empty list of tables"),
+    (('{ kind = "straight", length = 100.0 }', '{ kind = "straight" }'),
+     "track segment 1: missing 'length'"),
+    (('[{ kind = "straight", length = 100.0 }]', ARC.replace("}", ', direction = "up" }')),
+     "track segment 1: a arc segment direction must be one of ('left', 'right'), got 'up'"),
+    (("[track]\n", "[track]\nsegment = []\n"), "unknown key 'segment' in [track]"),
+    (("[solver]", "[solver]\nrtol = 0"), "[solver] rtol must be within [1e-12, 0.1] -, got 0.0"),
+    (("[solver]", "[solver]\natol = -1e-9"), "[solver] atol must be within"),
+    (("[solver]", '[solver]\nfixed_step = "1ms"'),
+     "[solver] fixed_step must be a number [s], got '1ms'"),
+    (("[solver]", "[solver]\nmax_steps = 10"), "unknown key 'max_steps' in [solver]"),
+    (("duration = 1.0\n[solver]", "duration = 3600.0\n[solver]\nfixed_step = 1e-7"),
+     "3600 s in fixed steps of 1e-07 s is 3.6e+10 steps; at most 2000000"),
+    (('name = "x"', "name = 5"), "the scenario name must be a string, got 5"),
+    (('name = "x"', 'name = ""'), "the scenario name must not be empty"),
+    (("speed = 10.0", "speed = [10.0]"), "[run] speed must be a number [m/s], got [10.0]"),
+    (("duration = 1.0", "duration = 0"), "[run] duration must be within [0.0001, 3600] s, got 0.0"),
+    (("duration = 1.0", "duration = -1.0"), "[run] duration must be within"),
+    (("[run]", "[run]\nmisalignment = 0.05"),
+     "[run] misalignment must be within [-0.035, 0.035] m, got 0.05"),
+    (("[run]", '[run]\nmisalignment = "2mm"'), "[run] misalignment must be a number [m], got '2mm'"),
+    (('model = "trailer"', "model = 3"), "[vehicle] model must be a string, got 3"),
+    (("[vehicle]", "[vehicle]\nwheelbase = 2.5"), "unknown key 'wheelbase' in [vehicle]"),
+    (('rail = "uic60"', 'rail = "uic60"\ninclination = 40'),
+     "[vehicle] inclination must be a string, got 40"),
 ]
+
+# Entries whose values are only known wrong when the scenario is built (profiles by name
+# or file, the layout's joints): build() names the file and the entry, before compiling.
+BAD_BUILDS = [
+    (('rail = "uic60"', 'rail = "uic61"'), "bad.toml: [vehicle] rail: unknown profile 'uic61'"),
+    (('wheel = "s1002"', 'wheel = "s1003"'), "bad.toml: [vehicle] wheel: unknown profile 's1003'"),
+    (('wheel = "s1002"', 'wheel = "uic60"'), "bad.toml: [vehicle] wheel: 'uic60' is a rail profile"),
+    (('rail = "uic60"', 'rail = "uic60"\ninclination = "1:30"'),
+     "bad.toml: [vehicle] rail: uic60: unknown inclination '1:30'"),
+    (('length = 100.0 }]', 'length = 100.0 }, { kind = "transition", length = 30.0 }]'),
+     "bad.toml: [track] segments: segments[1] (Transition): a transition at the end"),
+    (('[{ kind = "straight", length = 100.0 }]',
+      '[{ kind = "straight", length = 100.0 }, ' + ARC[1:]),
+     "bad.toml: [track] segments: discontinuous layout: cant jumps from 0.0 m to 0.1 m"),
+]
+
+
+@pytest.mark.parametrize("change, message", BAD_BUILDS)
+def test_bad_scenarios_are_named_when_built(change, message):
+    scenario = parse_scenario(MINIMAL.replace(*change), "bad.toml")
+    with pytest.raises(ValueError, match=re.escape(message)):
+        scenario.build()
 
 
 @pytest.mark.parametrize("change, message", BAD_INPUTS)

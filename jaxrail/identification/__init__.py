@@ -173,6 +173,18 @@ def _residual_functions(vehicle, params, track, names, measurements, common):
     return _residual_cache.get_or_make(key, functions)[0][0]
 
 
+def _checked_bounds(bounds) -> dict:
+    """User bounds {name: (lo, hi)}: within the parameter's range, 0 < lo < hi (the fit
+    moves in log space)."""
+    out = {}
+    for name, pair in dict(bounds or {}).items():
+        lo, hi = (parameter(name).check(x, "bounds") for x in pair)
+        if not 0.0 < lo < hi:
+            raise ValueError(f"bounds: {name} needs 0 < lo < hi, got ({lo:g}, {hi:g})")
+        out[name] = (lo, hi)
+    return out
+
+
 def identify(scenario, measurements: Measurements, names, initial=None, bounds=None,
              method="lbfgs", max_iterations=30, tolerance=1e-9, progress=False,
              built=None, cutoff=None, contact=None) -> Identification:
@@ -195,10 +207,14 @@ def identify(scenario, measurements: Measurements, names, initial=None, bounds=N
     unknown = set(initial) - set(names)
     if unknown:
         raise ValueError(f"initial values for parameters not fitted: {sorted(unknown)}")
-    x0 = np.array([float(initial[n]) for n in names])
-    limits = {n: (v / 10.0, v * 10.0) for n, v in zip(names, x0)} | dict(bounds or {})
+    x0 = np.array([parameter(n).check(initial[n], "initial value") for n in names])
+    limits = {n: (v / 10.0, v * 10.0) for n, v in zip(names, x0)} | _checked_bounds(bounds)
     lower = np.array([limits[n][0] for n in names])
     upper = np.array([limits[n][1] for n in names])
+    for name, value, lo, hi in zip(names, x0, lower, upper):
+        if not lo <= value <= hi:
+            raise ValueError(f"the initial {name} {value:g} lies outside its bounds "
+                             f"[{lo:g}, {hi:g}]")
     options = scenario.solver_options()
     common = dict(speed=scenario.speed, misalignment=scenario.misalignment,
                   duration=scenario.duration, options=options, cutoff=cutoff,

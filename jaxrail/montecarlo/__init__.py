@@ -20,8 +20,8 @@ from .sampling import DESIGNS, Variation, check_names, draw, parse_variation
 from .summary import sample_row
 from .table import read_table, write_table
 
-__all__ = ["DESIGNS", "MonteCarlo", "Variation", "draw", "parse_variation", "read_table",
-           "run_montecarlo", "run_samples", "write_table"]
+__all__ = ["DESIGNS", "MAX_SAMPLES", "MonteCarlo", "Variation", "check_samples", "draw",
+           "parse_variation", "read_table", "run_montecarlo", "run_samples", "write_table"]
 
 
 @dataclasses.dataclass
@@ -51,6 +51,23 @@ class MonteCarlo:
         return len(self.table["status"]) * duration / self.run_time_s
 
 
+MAX_SAMPLES = 1_000_000
+"""Most samples of one study (its table alone is then about 0.2 GB)."""
+
+
+def check_samples(samples: dict, where: str, key: str) -> None:
+    """Every value of ``samples`` {input: array} within the range of its input: the
+    scenario's (:data:`jaxrail.scenarios.checks.RANGES`) for speed and misalignment,
+    the parameter's (:mod:`jaxrail.vehicles.parameters`) for the others. The error
+    names ``where`` (with ``{name}`` for the input) and ``key``."""
+    for name in samples:
+        for value in np.atleast_1d(np.asarray(samples[name], dtype=float)):
+            if name in ("speed", "misalignment"):
+                checks.number(float(value), name, where.format(name=name), key)
+            elif name in PARAMETERS:
+                PARAMETERS[name].check(value, where.format(name=name), key)
+
+
 def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=None,
                 progress=False, keep_results=False, built=None, contact=None) -> MonteCarlo:
     """Run ``scenario`` once per sample: ``samples`` {input: array (N,)} with inputs
@@ -61,6 +78,9 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
     import jax
 
     check_names(samples, PARAMETERS)
+    # a misalignment beyond the lateral limit is a start that ends "derailed" at once
+    check_samples({k: v for k, v in samples.items() if k != "misalignment"},
+                  "samples[{name!r}]", "a value")
     lengths = {k: len(np.atleast_1d(v)) for k, v in samples.items()}
     if len(set(lengths.values())) > 1:
         raise ValueError(f"samples: every input needs the same number of values, got {lengths}")
@@ -105,10 +125,13 @@ def run_montecarlo(scenario, variations, n: int, *, seed: int = 0, design: str =
     ``seed`` and ``design`` (:func:`.sampling.draw`) and run them (:func:`run_samples`,
     whose keyword arguments pass through)."""
     variations = [parse_variation(v) if isinstance(v, str) else v for v in variations]
+    if not variations:
+        raise ValueError("give at least one input to vary (--vary): runs of the same "
+                         "inputs are one run")
+    if n > MAX_SAMPLES:
+        raise ValueError(f"{n} samples: at most {MAX_SAMPLES} in one study")
     samples = draw(variations, n, seed=seed, design=design)
-    for name in sorted(set(samples) & set(checks.RANGES)):  # the scenario's own ranges
-        for value in np.asarray(samples[name], dtype=float):
-            checks.number(float(value), name, f"--vary {name}", "a drawn value")
+    check_samples(samples, "--vary {name}", "a drawn value")
     result = run_samples(scenario, samples, **kwargs)
     result.seed = seed
     return result

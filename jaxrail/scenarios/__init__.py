@@ -75,14 +75,28 @@ class Scenario:
                              progress)
 
     def track(self) -> Track:
-        return Track.from_segments([_SEGMENTS[s["kind"]][0](**{k: v for k, v in s.items()
-                                                               if k != "kind"})
-                                    for s in self.segments])
+        """The track of ``[track] segments``; ValueError names the file and the segment."""
+        try:
+            return Track.from_segments([_SEGMENTS[s["kind"]][0](
+                **{k: v for k, v in s.items() if k != "kind"}) for s in self.segments])
+        except ValueError as error:
+            raise ValueError(f"{self.source}: [track] segments: {error}") from error
+
+    def _profile(self, key):
+        """The ``[vehicle] key`` profile (key "wheel" or "rail"); ValueError names the
+        file, the key and what was given."""
+        name = getattr(self, key)
+        try:
+            kind, profile = named_profile(name, self.inclination, kind=None)
+        except ValueError as error:
+            raise ValueError(f"{self.source}: [vehicle] {key}: {error}") from error
+        if kind != key:
+            raise ValueError(f"{self.source}: [vehicle] {key}: {name!r} is a {kind} profile")
+        return profile
 
     def build(self):
         """``(vehicle, params, track)``."""
-        _, wheel = named_profile(self.wheel, self.inclination, kind=None)
-        _, rail = named_profile(self.rail, self.inclination, kind=None)
+        wheel, rail = self._profile("wheel"), self._profile("rail")
         if self.model in ("trailer", "bogie"):
             values = trailer_values(self.vehicle_data)
             vehicle, params = (trailer if self.model == "trailer" else bogie)(wheel, rail, values)
@@ -140,6 +154,13 @@ def _vehicle_data(vehicle, where):
     return str(path)
 
 
+def _name(raw, where):
+    name = checks.text(raw, "name", where, "the scenario")
+    if not name.strip():
+        raise ValueError(f"{where}: the scenario name must not be empty")
+    return name
+
+
 def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
     """A :class:`Scenario` from TOML text; ValueError names the file, the entry, what is
     allowed (:mod:`.checks`) and what was given. Unknown tables and keys are errors."""
@@ -157,7 +178,7 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
     contact, number = tables["contact"], checks.number
     fixed_step = solver.get("fixed_step")
     scenario = Scenario(
-        name=checks.text(raw, "name", where, "the scenario"),
+        name=_name(raw, where),
         description=checks.text(raw, "description", where, "the scenario", ""),
         model=checks.text(vehicle, "model", where, "[vehicle]", choices=_MODELS),
         wheel=checks.text(vehicle, "wheel", where, "[vehicle]"),

@@ -10,11 +10,13 @@ railway record, a misalignment of 35 mm is the derailment limit) and sizes (at m
 import difflib
 import math
 
+from ..vehicles.parameters import PARAMETERS
+
 RANGES = {
     "speed": (0.1, 160.0, "m/s"),
     "misalignment": (-0.035, 0.035, "m"),
     "duration": (1e-4, 3600.0, "s"),
-    "friction": (0.01, 1.5, "-"),
+    "friction": (*PARAMETERS["friction"].range, PARAMETERS["friction"].unit),
     "rtol": (1e-12, 0.1, "-"),
     "atol": (1e-15, 1e-2, "-"),
     "output_rate": (0.01, 1e5, "Hz"),

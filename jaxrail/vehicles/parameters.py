@@ -13,6 +13,7 @@ and the primary suspension's seats on the frame; masses and inertias stay).
 """
 
 import dataclasses
+import math
 from collections.abc import Callable
 
 import equinox as eqx
@@ -24,21 +25,34 @@ from .vehicle import Vehicle, VehicleParams
 
 @dataclasses.dataclass(frozen=True)
 class Parameter:
-    """A named parameter: unit, meaning, and how to read and write it."""
+    """A named parameter: unit, meaning, how to read and write it, and the range
+    ``(low, high)`` of values accepted from users (draws, initial values, bounds)."""
 
     name: str
     unit: str
     description: str
     get: Callable[[Vehicle, VehicleParams], object]
     set: Callable[[Vehicle, VehicleParams, object], VehicleParams]
+    range: tuple[float, float]
+
+    def check(self, value, where: str, key: str | None = None) -> float:
+        """``value`` as a float if it is finite and within :attr:`range`, else
+        ValueError naming ``where``, ``key`` (default the name), the range and the value."""
+        low, high = self.range
+        value = float(value)
+        if not math.isfinite(value) or not low <= value <= high:
+            raise ValueError(f"{where}: {key or self.name} must be within [{low:g}, {high:g}] "
+                             f"{self.unit}, got {value!r}")
+        return value
 
 
-def _contact(field, unit, description):
+def _contact(field, unit, description, range_):
     return Parameter(
         field if field != "stiffness_scale" else "contact_stiffness", unit, description,
         lambda vehicle, params: getattr(params.contact, field),
         lambda vehicle, params, value: eqx.tree_at(lambda p: getattr(p.contact, field),
-                                                   params, jnp.asarray(value, jnp.float64)))
+                                                   params, jnp.asarray(value, jnp.float64)),
+        range_)
 
 
 def _restitution_get(vehicle, params):
@@ -100,7 +114,7 @@ def _wheelbase_set(vehicle, params, value):
                        (seats.at[jnp.asarray(rows), 0].set(ahead), layout))
 
 
-def _bushing(family, field, column, unit, description):
+def _bushing(family, field, column, unit, description, range_):
     def get(vehicle, params):
         rows = _bushing_rows(vehicle, family)
         return jnp.mean(getattr(params.system.forces["bushing"], field)[rows, column])
@@ -111,23 +125,24 @@ def _bushing(family, field, column, unit, description):
         return eqx.tree_at(where, params, where(params).at[rows, column].set(value))
 
     return Parameter(f"{family}_{description.replace(' ', '_')}", unit,
-                     f"{family} suspension {description}, per element", get, set_)
+                     f"{family} suspension {description}, per element", get, set_, range_)
 
 
 _AXES = {"longitudinal": 0, "lateral": 1, "vertical": 2}
 PARAMETERS = {p.name: p for p in [
-    _contact("stiffness_scale", "-", "factor on the Hertz contact stiffness (1 = Hertz)"),
-    _contact("friction", "-", "wheel-rail friction coefficient"),
+    _contact("stiffness_scale", "-", "factor on the Hertz contact stiffness (1 = Hertz)",
+             (0.01, 100.0)),
+    _contact("friction", "-", "wheel-rail friction coefficient", (0.01, 1.5)),
     Parameter("restitution", "-", "c_e of the normal law (effective e = sqrt(c_e))",
-              _restitution_get, _restitution_set),
-    *[_bushing(family, "stiffness", column, "N/m", f"{axis} stiffness")
+              _restitution_get, _restitution_set, (0.01, 1.0)),
+    *[_bushing(family, "stiffness", column, "N/m", f"{axis} stiffness", (0.0, 1e10))
       for family in ("primary", "secondary") for axis, column in _AXES.items()],
-    *[_bushing(family, "damping", column, "N s/m", f"{axis} damping")
+    *[_bushing(family, "damping", column, "N s/m", f"{axis} damping", (0.0, 1e8))
       for family in ("primary", "secondary") for axis, column in _AXES.items()],
     Parameter("track_gauge", "m", "distance between the rails' gauge points, 14 mm below "
-              "their tops", _gauge_get, _gauge_set),
+              "their tops", _gauge_get, _gauge_set, (0.6, 1.7)),
     Parameter("wheelbase", "m", "axle spacing of each bogie", _wheelbase_get,
-              _wheelbase_set),
+              _wheelbase_set, (0.5, 5.0)),
 ]}
 
 
