@@ -26,11 +26,16 @@ def _check_gauge(gauge_mm):
                          f"{gauge_mm}")
 
 
+MAX_PROFILE_POINTS = 100_001  # a point every 0.7 um across a 70 mm profile
+
+
 def _profile_command(args):
     from . import profiles
     from .plots.profiles import plot_wheel_on_rail
 
     _check_gauge(args.gauge)
+    if not 2 <= args.points <= MAX_PROFILE_POINTS:
+        raise ValueError(f"--points must be within [2, {MAX_PROFILE_POINTS}], got {args.points}")
     if args.kind is not None:
         kind, profile = args.kind, profiles.read_profile(args.name, kind=args.kind)
     else:
@@ -220,8 +225,8 @@ def _montecarlo_command(args):
 
     from .montecarlo import parse_variation, run_montecarlo, write_table
     from .montecarlo.sampling import check_names
-    from .vehicles.parameters import PARAMETERS
     from .scenarios import load_scenario
+    from .vehicles.parameters import PARAMETERS
 
     if args.distributed:
         import jax
@@ -229,6 +234,8 @@ def _montecarlo_command(args):
         jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
     if args.samples < 1:
         raise ValueError(f"--samples must be >= 1, got {args.samples}")
+    if args.seed < 0:
+        raise ValueError(f"--seed must be >= 0, got {args.seed}")
     for path in args.out or ():
         if Path(path).suffix.lower() not in (".csv", ".parquet"):
             raise ValueError(f"--out {path}: the suffix must be .csv or .parquet")
