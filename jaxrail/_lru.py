@@ -29,6 +29,3 @@ class LruCache:
         if len(self._entries) > self.size:
             self._entries.popitem(last=False)
         return value, True
-
-    def clear(self):
-        self._entries.clear()

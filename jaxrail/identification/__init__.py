@@ -1,8 +1,9 @@
 """Identification of vehicle and contact parameters from measured time histories.
 
 ``identify(scenario, measurements, ["contact_stiffness", "friction"])`` simulates the
-scenario with trial values of the named parameters (:mod:`.parameters`), compares the
-measured channels (:mod:`.measurements`) with the simulated ones, and fits the values
+scenario with trial values of the named parameters
+(:mod:`jaxrail.vehicles.parameters`), compares the measured channels
+(:mod:`.measurements`) with the simulated ones, and fits the values
 by weighted least squares with optax in bounded log space, gradients through the whole
 simulation by AD (forward mode for up to ``FORWARD_MODE_PARAMETERS`` parameters, else
 reverse mode with recursive checkpointing), closing with Gauss-Newton steps
@@ -19,10 +20,10 @@ import numpy as np
 from .._lru import LruCache
 from ..scenarios.checks import MAX_OUTPUTS
 from ..simulation import SolverOptions, solve
+from ..vehicles.parameters import PARAMETERS, get_values, parameter, set_values
 from .fit import POLISH_ITERATIONS, FitResult, channel_standard_errors, least_squares
 from .measurements import (Measurements, channel_values, check_channels,
                            gaussian_window, read_measurements, sample, write_measurements)
-from ..vehicles.parameters import PARAMETERS, get_values, parameter, set_values
 
 __all__ = ["FitResult", "Identification", "Measurements", "PARAMETERS", "channel_values",
            "get_values", "identify", "least_squares", "parameter", "read_measurements",

@@ -13,8 +13,9 @@ import dataclasses
 
 import numpy as np
 
-from ..vehicles.parameters import PARAMETERS, get_values
+from .._ranges import within
 from ..scenarios import checks
+from ..vehicles.parameters import PARAMETERS, get_values
 from .batch import run_chunks
 from .sampling import DESIGNS, Variation, check_names, draw, parse_variation
 from .summary import sample_row
@@ -60,12 +61,17 @@ def check_samples(samples: dict, where: str, key: str) -> None:
     scenario's (:data:`jaxrail.scenarios.checks.RANGES`) for speed and misalignment,
     the parameter's (:mod:`jaxrail.vehicles.parameters`) for the others. The error
     names ``where`` (with ``{name}`` for the input) and ``key``."""
-    for name in samples:
-        for value in np.atleast_1d(np.asarray(samples[name], dtype=float)):
-            if name in ("speed", "misalignment"):
-                checks.number(float(value), name, where.format(name=name), key)
-            elif name in PARAMETERS:
-                PARAMETERS[name].check(value, where.format(name=name), key)
+    for name, values in samples.items():
+        if name in ("speed", "misalignment"):
+            low, high, unit = checks.RANGES[name]
+        elif name in PARAMETERS:
+            (low, high), unit = PARAMETERS[name].range, PARAMETERS[name].unit
+        else:
+            continue
+        values = np.atleast_1d(np.asarray(values, dtype=float))
+        bad = ~(np.isfinite(values) & (values >= low) & (values <= high))
+        if bad.any():  # the first value out of range, named
+            within(values[bad][0], low, high, unit, f"{where.format(name=name)}: {key}")
 
 
 def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=None,

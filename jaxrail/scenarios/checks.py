@@ -8,8 +8,8 @@ railway record, a misalignment of 35 mm is the derailment limit) and sizes (at m
 """
 
 import difflib
-import math
 
+from .._ranges import within
 from ..vehicles.parameters import PARAMETERS
 
 RANGES = {
@@ -36,10 +36,7 @@ def number(value, name: str, where: str, key: str | None = None) -> float:
     label = f"{where}: {key or name}"
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ValueError(f"{label} must be a number [{unit}], got {value!r}")
-    value = float(value)
-    if not math.isfinite(value) or not low <= value <= high:
-        raise ValueError(f"{label} must be within [{low:g}, {high:g}] {unit}, got {value!r}")
-    return value
+    return within(value, low, high, unit, label)
 
 
 def known_keys(table, allowed, where: str, label: str) -> dict:

@@ -13,12 +13,12 @@ and the primary suspension's seats on the frame; masses and inertias stay).
 """
 
 import dataclasses
-import math
 from collections.abc import Callable
 
 import equinox as eqx
 import jax.numpy as jnp
 
+from .._ranges import within
 from ..profiles.measures import gauge_point, rail_offset
 from .vehicle import Vehicle, VehicleParams
 
@@ -38,12 +38,7 @@ class Parameter:
     def check(self, value, where: str, key: str | None = None) -> float:
         """``value`` as a float if it is finite and within :attr:`range`, else
         ValueError naming ``where``, ``key`` (default the name), the range and the value."""
-        low, high = self.range
-        value = float(value)
-        if not math.isfinite(value) or not low <= value <= high:
-            raise ValueError(f"{where}: {key or self.name} must be within [{low:g}, {high:g}] "
-                             f"{self.unit}, got {value!r}")
-        return value
+        return within(value, *self.range, self.unit, f"{where}: {key or self.name}")
 
 
 def _contact(field, unit, description, range_):
