@@ -131,6 +131,20 @@ def signed_depth(rail: Profile, u, eta, zeta) -> Float[Array, ""]:
     return -gap / jnp.sqrt(1.0 + f1 * f1)
 
 
+def wheel_surface_point(surface: Profile, nominal_radius, y, wheel_origin: Float[Array, "3"],
+                        frame: WheelFrame, side):
+    """The point of the strip at wheel profile coordinate ``y`` [m] that the search
+    tests against the rail (the strip's lowest point toward the rail, at the angle
+    ``s_w`` of eq. 12), global [m], and ``s_w`` [rad]. Arguments as :func:`strip_point`."""
+    height, slope, _ = surface.height_derivatives(y)
+    radius = nominal_radius + height
+    # sin and cos of s_w (eq. 12, as in strip_angle) without trigonometric functions;
+    # s_w itself is computed only where a caller uses it.
+    sin_w = jnp.clip(side * slope * frame.sin_alpha / frame.cos_alpha, -0.999, 0.999)
+    radial = -jnp.sqrt(1.0 - sin_w * sin_w) * frame.up + sin_w * frame.forward
+    return wheel_origin + side * y * frame.axle + radius * radial, jnp.arcsin(sin_w)
+
+
 def strip_point(
     surface: Profile,
     nominal_radius,
@@ -158,14 +172,7 @@ def strip_point(
         foot_derivatives: False (static) where only the depth is differentiated: the
             rail foot ``u_r`` then carries no derivatives (:func:`rail_foot`).
     """
-    height, slope, _ = surface.height_derivatives(y)
-    radius = nominal_radius + height
-    # sin and cos of s_w (eq. 12, as in strip_angle) without trigonometric functions;
-    # s_w itself is computed only where a caller uses it.
-    sin_w = jnp.clip(side * slope * frame.sin_alpha / frame.cos_alpha, -0.999, 0.999)
-    s_w = jnp.arcsin(sin_w)
-    radial = -jnp.sqrt(1.0 - sin_w * sin_w) * frame.up + sin_w * frame.forward
-    point = wheel_origin + side * y * frame.axle + radius * radial
+    point, s_w = wheel_surface_point(surface, nominal_radius, y, wheel_origin, frame, side)
     rel = point - rail_origin
     t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
     eta, zeta = side * (rel @ n), rel @ b

@@ -14,21 +14,25 @@ A :class:`ContactTable` holds, for each rail (left, right) and each node of a gr
 finds with the wheel lowered until its deepest patch penetrates each depth of the
 approach axis: the wheel's vertical position there and, per patch slot, the signed
 depth and its derivative in ``vertical``, the contact point on the wheel and rail
-profiles, its longitudinal offset and wheel angle (eqs. 12-13), and the Hertz
-curvature of the patch. Patches are
-tracked along the lateral axis at build time, so that a slot holds the same patch from
-node to node and interpolation never mixes two patches.
+profiles, and the Hertz curvature of the patch. Patches are tracked along the lateral
+axis at build time (in order along the wheel: two patches of one surface cannot pass
+each other), so that a slot holds the same patch from node to node and interpolation
+does not mix two patches.
 
 Lookups interpolate every field with a quadratic B-spline through the nodes along
-lateral, yaw and roll (C1, one block of 3 x 3 x 3 coefficients at every approach
-level), then along the levels in the wheel's vertical position: each patch's depth by
-cubic Hermite interpolation from its depth and slope at the two levels around it, the
-other fields by Catmull-Rom interpolation across the levels. They derive
-the rest of :class:`jaxrail.contact.ContactPatches` (contact frame, angle, rolling
-radius, profile curvatures) from the profiles at the interpolated points, as the
-search does.
+lateral, yaw and roll (C1, one block of 3 x 3 x 3 coefficients), first the wheel's
+vertical position at the levels, then the slots at the four levels around the wheel's
+actual position, and along those levels by cubic Hermite interpolation in the vertical
+position: each patch's depth from its depth and slope at the two levels around it, the
+other fields with tangents from the neighbouring levels. They derive the rest of
+:class:`jaxrail.contact.ContactPatches` as the search does, from the wheel's actual
+pose and the profiles at the interpolated points: the wheel point on the wheel's strip
+(eq. 12; the creepages are taken between it and the rail point, so its height matters
+to 1e-5 of the rolling radius), its longitudinal offset, the contact frame, angle,
+rolling radius and profile curvatures.
 """
 
+import itertools
 import math
 
 import equinox as eqx
@@ -39,20 +43,19 @@ import numpy as np
 from ..track import project, rail_frame, straight_track
 from .search import (HALF_TAPING_DISTANCE, ContactPatches, SearchConfig, contact_geometry,
                      deepest_depth, search_wheel)
-from .strip import wheel_frame
+from .strip import wheel_frame, wheel_surface_point
 
-FIELDS = ("depth_offset", "depth_slope", "y_wheel", "y_rail", "s_wheel", "dx",
-          "curvature_contact_y")
+GEOMETRY = ("y_wheel", "y_rail", "curvature_contact_y")  # a slot's contact
+FIELDS = ("depth_offset", "depth_slope") + GEOMETRY
 _CLEAR = 1.0e-3  # [m] slots that never hold a patch: this far clear of the rail
-# [m] per node: a slot's depth where its patch has gone falls off this fast from the last
-# node that held it (a ramp, not a step: the spline through the nodes would ring)
+# [m] per node: where its patch has gone, a slot's depth falls below the rail within one
+# node and on by the patch's own trend (no kink for the spline to ring at), at least
+# _RAMP_MIN and at most _RAMP; across yaw and roll by _RAMP
 _RAMP = 3.0e-5
-# [m] per node: along the lateral axis a gone patch's depth continues its own trend
-# (no kink for the spline to ring at), falling by at least this and its last depth,
-# at most _RAMP
 _RAMP_MIN = 1.0e-6
 _CANDIDATE = 1.5e-4  # [m] a found slot deeper than -this is a patch (search: 1e-4)
 _TRACK_JUMP = 1.0e-2  # [m] largest move of a patch on the wheel between lateral nodes
+_MATCH_LIMIT = 1.0  # [m] between levels and yaw or roll nodes: pair as many as there are
 _LEVEL_TOLERANCE = 1.0e-7  # [m] on the deepest depth at each approach level (reported)
 
 
@@ -102,13 +105,15 @@ class ContactTable(eqx.Module):
     float64, sides (left, right): quadratic B-spline coefficients along lateral, yaw
     and roll (two more than the nodes along every axis of two or more nodes) of the
     fields of :data:`FIELDS` per patch slot at each approach level, and in the last slot
-    the wheel's vertical position at that level (first field). Kept as ``rows``, one
-    row per (side, lateral, yaw, roll) node, so that a lookup gathers whole rows from
-    the array as it is (reshaping a traced table inside the integrator's loop makes
-    XLA:CPU's loop emitters slow); ``values`` gives them back in their shape.
+    the wheel's vertical position at that level (first field). Kept as ``heights``, one
+    row of levels per (side, lateral, yaw, roll) node, and ``rows``, one row of slots
+    per node and level, so that a lookup gathers whole rows from the arrays as they are
+    (reshaping a traced table inside the integrator's loop makes XLA:CPU's loop emitters
+    slow), and only the levels it needs; ``values`` gives them back in their shape.
 
     Fields:
-        rows: (2 lateral yaw roll, approach (slots + 1) len(FIELDS)) float64.
+        rows: (2 lateral yaw roll approach, slots len(FIELDS)) float64.
+        heights: (2 lateral yaw roll, approach) float64 [m].
         shape: the shape of ``values`` (static).
         grid: the :class:`TableGrid`.
         surfaces: wheel surface index of each slot (static).
@@ -116,6 +121,7 @@ class ContactTable(eqx.Module):
     """
 
     rows: jax.Array
+    heights: jax.Array
     shape: tuple[int, ...] = eqx.field(static=True)
     grid: TableGrid = eqx.field(static=True)
     surfaces: tuple[int, ...] = eqx.field(static=True)
@@ -123,21 +129,28 @@ class ContactTable(eqx.Module):
 
     def __init__(self, values, grid: TableGrid, surfaces, radius):
         self.shape = tuple(int(n) for n in values.shape)
-        self.rows = jnp.asarray(values).reshape(math.prod(self.shape[:4]), -1)
+        values = jnp.asarray(values)
+        nodes, slots = math.prod(self.shape[:4]), self.shape[5] - 1
+        self.rows = values[..., :slots, :].reshape(nodes * self.shape[4], -1)
+        self.heights = values[..., slots, 0].reshape(nodes, self.shape[4])
         self.grid, self.surfaces, self.radius = grid, tuple(surfaces), float(radius)
 
     @property
     def values(self) -> jax.Array:
         """The coefficients in their shape (see the class docstring)."""
-        return self.rows.reshape(self.shape)
+        slots = self.rows.reshape(self.shape[:5] + (self.shape[5] - 1, self.shape[6]))
+        last = jnp.zeros(self.shape[:5] + (1, self.shape[6])).at[..., 0, 0].set(
+            self.heights.reshape(self.shape[:5]))
+        return jnp.concatenate([slots, last], axis=-2)
 
 
 def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotation, side):
     """Pose of one wheel relative to its rail (module docstring).
 
-    Returns ``(lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes)``: the four
-    pose coordinates [m, m, rad, rad] and the rail section's arc length [m], origin (3,)
-    and axes (3, 3)."""
+    Returns ``(lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, wheel_origin,
+    frame)``: the four pose coordinates [m, m, rad, rad], the rail section's arc length
+    [m], origin (3,) and axes (3, 3), and the wheel's origin (3,) and
+    :class:`~jaxrail.contact.strip.WheelFrame`."""
     axle = wheelset_rotation[:, 1]
     wheel_origin = wheelset_position + side * HALF_TAPING_DISTANCE * axle
     s_rail = project(track, wheel_origin)
@@ -148,7 +161,7 @@ def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotati
     roll = jnp.arcsin(jnp.clip(local[2], -1.0, 1.0))
     yaw = jnp.arctan2(-local[0], local[1])
     return (taping @ rail_axes[:, 1], taping @ rail_axes[:, 2], yaw, roll, s_rail, rail_origin,
-            rail_axes)
+            rail_axes, wheel_origin, frame)
 
 
 def _pose_on_straight(track, rail_offset, radius, lateral, vertical, yaw, roll, side):
@@ -209,8 +222,8 @@ def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, le
         empty = patches.y_wheel == first_strip[patches.surface]
         found = patches.active | ((signed > -_CANDIDATE) & (signed <= 0.0) & ~empty)
         slope = -d_signed  # the depth grows as the wheel comes down
-        values = jnp.stack([signed + slope * z, slope, patches.y_wheel, patches.y_rail,
-                            patches.s_wheel, patches.dx, patches.curvature_contact_y], axis=-1)
+        values = jnp.stack([signed + slope * z, slope]
+                           + [getattr(patches, name) for name in GEOMETRY], axis=-1)
         return found, values
 
     heights, misses = [], []
@@ -235,55 +248,89 @@ def _run_nodes(wheel, rail, rail_offset, nodes, side, config, radius, levels):
 
 
 def _distance(a, b):
-    """How far apart two patches' values (F,) are [m]: their wheel coordinates, depth
-    offsets (ten times: twin maxima sharing a run are close on the wheel but not in
-    depth) and depth slopes (a millimetre per unit)."""
-    return (abs(a[2] - b[2]) + 10.0 * abs(a[0] - b[0]) + 1.0e-3 * abs(a[1] - b[1]))
+    """How far apart two patches are [m], each given as (wheel coordinate [m], depth [m],
+    depth slope): their wheel coordinates, depths (ten times: twin maxima sharing a run
+    are close on the wheel but not in depth) and slopes (a millimetre per unit). Depths,
+    not depth offsets: an offset moves with the wheel's height, which differs from node
+    to node (by tenths of a millimetre per node in flange contact)."""
+    return abs(a[0] - b[0]) + 10.0 * abs(a[1] - b[1]) + 1.0e-3 * abs(a[2] - b[2])
 
 
-def _track_line(found, values, depth, surfaces):
+def _key(value, depth):
+    """(wheel coordinate, depth, depth slope) of a patch's values (F,) and depth [m]."""
+    return np.array([value[2], depth, value[1]])
+
+
+def _pair(old, new, cost, limit):
+    """Order-preserving pairs ``(i, j)`` of ``old[i]`` with ``new[j]`` (both sorted along
+    the wheel): two patches of one surface are separate maxima of the penetration and
+    cannot pass each other on the wheel without merging, so the k-th paired old patch
+    goes to the k-th paired new one. Of all such pairings, the one with the least
+    ``cost(i, j)`` plus ``limit / 2`` per patch left unpaired; pairs costing ``limit`` or
+    more are not allowed."""
+    best, best_cost = [], 0.5 * limit * (len(old) + len(new))
+    for r in range(1, min(len(old), len(new)) + 1):
+        for olds in itertools.combinations(range(len(old)), r):
+            for news in itertools.combinations(range(len(new)), r):
+                costs = [cost(i, j) for i, j in zip(olds, news)]
+                if max(costs) >= limit:
+                    continue
+                total = sum(costs) + 0.5 * limit * (len(old) + len(new) - 2 * r)
+                if total < best_cost:
+                    best, best_cost = list(zip(olds, news)), total
+    return best
+
+
+def _track_line(found, values, depth, surfaces, heights):
     """Slot-consistent values (L, P, F) and owned flags (L, P) of one lateral line:
-    patches tracked along the lateral axis by their wheel coordinate, each surface's
-    slots assigned in order of birth; empty slots continue the nearest value of their
-    track, falling off as :func:`_fall` says."""
+    patches tracked along the lateral axis (:func:`_pair`, each track's next wheel
+    coordinate and depth offset also predicted from its last two nodes: on a conformal
+    tread patches move several times their spacing per millimetre of shift), each
+    surface's slots assigned in order of birth; empty slots continue the nearest value of
+    their track, its depth (at each node's own ``heights`` (L,) [m]: the wheel's height
+    changes from node to node) falling off as :func:`_fall` says."""
     n, p, _ = values.shape
     out = np.zeros_like(values)
     owner = np.full((n, p), -1)  # track id per node and slot
     held = np.full((n, p), -np.inf)  # depth of the patch in each slot and node
-    tracks = []  # (surface, last values, last node) per track id
-    slot_of = {}
+    tracks = []  # per track id: [surface, slot, last key, key before, last node] (_key)
     for i in range(n):
-        used = set()
         newcomers = []
-        for k in sorted(np.flatnonzero(found[i]), key=lambda k: -depth[i, k]):
-            surface = surfaces[k]
-            best, distance = None, _TRACK_JUMP
-            for t, (s, last, last_i) in enumerate(tracks):
-                if s == surface and last_i == i - 1 and t not in used:
-                    gap = _distance(last, values[i, k])
-                    if gap < distance:
-                        best, distance = t, gap
-            if best is None:
-                newcomers.append(k)
-                continue
-            used.add(best)
-            tracks[best] = (surface, values[i, k], i)
-            owner[i, slot_of[best]] = best
-            out[i, slot_of[best]] = values[i, k]
-            held[i, slot_of[best]] = depth[i, k]
-        for k in newcomers:  # deepest first
+        for surface in sorted(set(surfaces)):
+            alive = sorted((t for t, track in enumerate(tracks)
+                            if track[0] == surface and track[4] == i - 1),
+                           key=lambda t: tracks[t][2][0])
+            mine = sorted((k for k in np.flatnonzero(found[i]) if surfaces[k] == surface),
+                          key=lambda k: values[i, k, 2])
+
+            def cost(a, b):
+                _, _, last, before, _ = tracks[alive[a]]
+                guesses = [last] if before is None else [last, 2.0 * last - before]
+                return min(_distance(g, _key(values[i, mine[b]], depth[i, mine[b]]))
+                           for g in guesses)
+
+            pairs = _pair(alive, mine, cost, _TRACK_JUMP)
+            for a, b in pairs:
+                t, k = alive[a], mine[b]
+                track = tracks[t]
+                track[2], track[3], track[4] = _key(values[i, k], depth[i, k]), track[2], i
+                owner[i, track[1]], out[i, track[1]] = t, values[i, k]
+                held[i, track[1]] = depth[i, k]
+            paired = {mine[b] for _, b in pairs}
+            newcomers += [k for k in mine if k not in paired]
+        for k in sorted(newcomers, key=lambda k: -depth[i, k]):  # deepest first
             surface = surfaces[k]
             free = [j for j in range(p) if surfaces[j] == surface
                     and owner[i, j] < 0 and (i == 0 or owner[i - 1, j] < 0)]
             if not free:
                 # more patches than slots: the shallowest patch gives up its slot
-                mine = [j for j in range(p) if surfaces[j] == surface and owner[i, j] >= 0]
-                j = min(mine, key=lambda j: held[i, j]) if mine else None
+                taken = [j for j in range(p) if surfaces[j] == surface and owner[i, j] >= 0]
+                j = min(taken, key=lambda j: held[i, j]) if taken else None
                 if j is None or held[i, j] >= depth[i, k]:
                     continue
+                tracks[owner[i, j]][4] = -1  # that track ends here
                 free = [j]
-            tracks.append((surface, values[i, k], i))
-            slot_of[len(tracks) - 1] = free[0]
+            tracks.append([surface, free[0], _key(values[i, k], depth[i, k]), None, i])
             owner[i, free[0]] = len(tracks) - 1
             out[i, free[0]] = values[i, k]
             held[i, free[0]] = depth[i, k]
@@ -297,49 +344,65 @@ def _track_line(found, values, depth, surfaces):
         for i in np.flatnonzero(owner[:, j] < 0):
             near = have[np.argmin(np.abs(have - i))]
             out[i, j] = out[near, j]
-            out[i, j, 0] -= min(_CLEAR, _fall(out[:, j, 0], owner[:, j], held[:, j], near, i)
-                                * abs(i - near))
+            fall = min(_CLEAR, _fall(held[:, j], owner[:, j], near, i) * abs(i - near))
+            out[i, j, 0] += out[i, j, 1] * (heights[i] - heights[near]) - fall
     return out, owner >= 0
 
 
-def _fall(offset, owner, held, near, i):
-    """How fast [m per node] a slot's depth offset falls from ``near``, the last node
-    whose patch it held, toward ``i``: the patch's own trend over the node before
-    ``near`` when the same patch was there (a continued line has no kink for the
-    spline to ring at), at least its depth at ``near`` and ``_RAMP_MIN``, at most
-    ``_RAMP``."""
+def _fall(held, owner, near, i):
+    """How fast [m per node] a slot's depth falls from ``near``, the last node whose
+    patch it held (``held``: the depths), toward ``i``: the patch's own trend over the
+    node before ``near`` when the same patch was there (a continued line has no kink for
+    the spline to ring at) between ``_RAMP_MIN`` and ``_RAMP``, and at least its depth at
+    ``near`` (a gone patch is clear of the rail from the next node on)."""
     inner = near - 1 if i > near else near + 1
     trend = 0.0
-    if 0 <= inner < len(offset) and owner[inner] == owner[near]:
-        trend = offset[inner] - offset[near]
-    return float(np.clip(max(trend, held[near]), _RAMP_MIN, _RAMP))
+    if 0 <= inner < len(held) and owner[inner] == owner[near]:
+        trend = held[inner] - held[near]
+    return max(float(np.clip(trend, _RAMP_MIN, _RAMP)), float(held[near]))
 
 
-def _match(found, values, depth, reference, owned, surfaces, rigid):
+def _match(found, values, depth, reference, owned, surfaces, rigid, height, reference_height):
     """Values (P, F) of a node in the slots of an already assigned neighbour
-    (``reference`` (P, F), ``owned`` (P,)): each patch, deepest first, goes to the owned
-    slot of its surface nearest on the wheel, a newcomer to a free slot. A slot left
-    empty keeps the neighbour's values: as they are when ``rigid`` (the next deeper
-    approach level: its depth offset and slope continue the patch as the wheel rises),
-    else one ramp step (``_RAMP``) clear of it. Returns the values and the owned flags."""
+    (``reference`` (P, F), ``owned`` (P,)): each surface's patches paired in order along
+    the wheel with the neighbour's owned slots (:func:`_pair`, as many pairs as there
+    can be, then the nearest), a newcomer to a free slot. A slot left empty keeps the
+    neighbour's values: as they are when ``rigid`` (the next deeper approach level: its
+    depth offset and slope continue the patch as the wheel rises), else with the
+    neighbour's depth (the wheel's vertical position is ``height`` [m] here,
+    ``reference_height`` there), clear of the rail by at least one ramp step
+    (``_RAMP``) where the neighbour held a patch. Returns the values and the owned
+    flags."""
     out, taken = reference.copy(), np.zeros(len(owned), dtype=bool)
-    for k in sorted(np.flatnonzero(found), key=lambda k: -depth[k]):
-        mine = [j for j in range(len(owned)) if surfaces[j] == surfaces[k] and not taken[j]]
-        near = [j for j in mine if owned[j]]
-        if near:
-            j = min(near, key=lambda j: _distance(reference[j], values[k]))
-        elif mine:
-            j = mine[0]
-        else:
-            continue
-        out[j], taken[j] = values[k], True
+    # the neighbour's depths: its patches' lines continued to this height when rigid
+    reference_depth = reference[:, 0] - reference[:, 1] * (height if rigid else reference_height)
+    for surface in sorted(set(surfaces)):
+        slots = sorted((j for j in range(len(owned)) if surfaces[j] == surface and owned[j]),
+                       key=lambda j: reference[j, 2])
+        mine = sorted((k for k in np.flatnonzero(found) if surfaces[k] == surface),
+                      key=lambda k: values[k, 2])
+        def cost(a, b):
+            j, k = slots[a], mine[b]
+            return _distance(_key(reference[j], reference_depth[j]), _key(values[k], depth[k]))
+
+        pairs = _pair(slots, mine, cost, _MATCH_LIMIT)
+        for a, b in pairs:
+            out[slots[a]], taken[slots[a]] = values[mine[b]], True
+        paired = {mine[b] for _, b in pairs}
+        free = [j for j in range(len(owned)) if surfaces[j] == surface and not owned[j]]
+        for k in sorted((k for k in mine if k not in paired), key=lambda k: -depth[k]):
+            if free:
+                j = free.pop(0)
+                out[j], taken[j] = values[k], True
     if not rigid:
-        out[~taken & owned, 0] -= _RAMP
+        out[~taken, 0] += out[~taken, 1] * (height - reference_height)
+        gone = ~taken & owned
+        out[gone, 0] -= np.maximum(_RAMP, reference_depth[gone])
         return out, taken
     return out, owned | taken
 
 
-def _assign_slots(found, values, depth, surfaces):
+def _assign_slots(found, values, depth, heights, surfaces):
     """Slot-consistent values (L, Y, R, A, P, F) of a whole grid (lateral, yaw, roll,
     approach): patches tracked along the lateral axis on the central yaw and roll line
     at the deepest approach, then every other node matched to its neighbour toward that
@@ -352,10 +415,11 @@ def _assign_slots(found, values, depth, surfaces):
     def match(i, j, k, m, ref, rigid):
         out[i, j, k, m], owned[i, j, k, m] = _match(
             found[i, j, k, m], values[i, j, k, m], depth[i, j, k, m], out[(i,) + ref],
-            owned[(i,) + ref], surfaces, rigid)
+            owned[(i,) + ref], surfaces, rigid, heights[i, j, k, m], heights[(i,) + ref])
 
     out[:, jc, kc, deep], owned[:, jc, kc, deep] = _track_line(
-        found[:, jc, kc, deep], values[:, jc, kc, deep], depth[:, jc, kc, deep], surfaces)
+        found[:, jc, kc, deep], values[:, jc, kc, deep], depth[:, jc, kc, deep], surfaces,
+        heights[:, jc, kc, deep])
     outward = lambda centre, count: [x for x in sorted(range(count), key=lambda x: abs(x - centre))  # noqa: E731
                                      if x != centre]
     for i in range(n_lat):
@@ -371,6 +435,27 @@ def _assign_slots(found, values, depth, surfaces):
                 for m in range(n_app):
                     match(i, j, k, m, (j, toward, m), False)
     return out
+
+
+def _search_side(wheel, rail, rail_offset, config, grid, side, chunk, progress):
+    """The search at every node of ``grid`` for the ``side`` rail, in compiled batches of
+    ``chunk`` nodes: found (L, Y, R, A, P), values (L, Y, R, A, P, F), depth (L, Y, R,
+    A, P), heights (L, Y, R, A) and the miss of each node [m] (:func:`_node`);
+    ``progress(done)`` after each batch."""
+    radius = float(wheel.nominal_radius)
+    nodes = np.stack(np.meshgrid(grid.lateral.nodes, grid.yaw.nodes, grid.roll.nodes,
+                                 indexing="ij"), axis=-1).reshape(-1, 3)
+    parts = []
+    for start in range(0, len(nodes), chunk):
+        batch = nodes[start:start + chunk]
+        padded = np.concatenate([batch, np.repeat(batch[-1:], chunk - len(batch), 0)])
+        out = _run_nodes(wheel, rail, float(rail_offset), jnp.asarray(padded), jnp.asarray(side),
+                         config, radius, grid.levels)
+        parts.append([np.asarray(x)[:len(batch)] for x in out])
+        if progress is not None:
+            progress(start + len(batch))
+    shape = (grid.lateral.count, grid.yaw.count, grid.roll.count)
+    return tuple(np.concatenate(x).reshape(shape + np.shape(x[0])[1:]) for x in zip(*parts))
 
 
 def build_contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchConfig(),
@@ -392,39 +477,20 @@ def build_contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchC
     """
     radius = float(wheel.nominal_radius)
     surfaces = tuple(k for k, _ in enumerate(wheel.surfaces) for _ in range(config.max_patches))
-    lateral, yaw, roll = grid.lateral.nodes, grid.yaw.nodes, grid.roll.nodes
-    nodes = np.stack(np.meshgrid(lateral, yaw, roll, indexing="ij"), axis=-1).reshape(-1, 3)
-    total, done, worst_miss, misses = 2 * len(nodes), 0, 0.0, 0
+    count = grid.lateral.count * grid.yaw.count * grid.roll.count
+    total, worst_miss, misses = 2 * count, 0.0, 0
     sides = []
-    levels = grid.levels
-    for side in (1.0, -1.0):
-        found, values, depth, heights = [], [], [], []
-        for start in range(0, len(nodes), chunk):
-            batch = nodes[start:start + chunk]
-            padded = np.concatenate([batch, np.repeat(batch[-1:], chunk - len(batch), 0)])
-            f, v, d, z, miss = _run_nodes(wheel, rail, float(rail_offset), jnp.asarray(padded),
-                                          jnp.asarray(side), config, radius, levels)
-            found.append(np.asarray(f)[:len(batch)])
-            values.append(np.asarray(v)[:len(batch)])
-            depth.append(np.asarray(d)[:len(batch)])
-            heights.append(np.asarray(z)[:len(batch)])
-            miss = np.asarray(miss)[:len(batch)]
-            worst_miss = max(worst_miss, float(np.max(miss)))
-            misses += int(np.sum(miss > _LEVEL_TOLERANCE))
-            done += len(batch)
-            if progress is not None:
-                progress(done, total)
-        shape = (len(lateral), len(yaw), len(roll), grid.approach.count)
-        found = np.concatenate(found).reshape(shape + (len(surfaces),))
-        values = np.concatenate(values).reshape(shape + (len(surfaces), len(FIELDS)))
-        depth = np.concatenate(depth).reshape(shape + (len(surfaces),))
-        heights = np.concatenate(heights).reshape(shape)
-        tracked = _assign_slots(found, values, depth, surfaces)
+    for n, side in enumerate((1.0, -1.0)):
+        report = None if progress is None else (lambda done: progress(n * count + done, total))
+        found, values, depth, heights, miss = _search_side(wheel, rail, rail_offset, config, grid,
+                                                           side, chunk, report)
+        worst_miss = max(worst_miss, float(np.max(miss)))
+        misses += int(np.sum(miss > _LEVEL_TOLERANCE))
+        tracked = _assign_slots(found, values, depth, heights, surfaces)
         # the wheel's vertical position at each level as one more slot (first field)
-        extra = np.zeros(shape + (1, len(FIELDS)))
+        extra = np.zeros(heights.shape + (1, len(FIELDS)))
         extra[..., 0, 0] = heights
-        tracked = np.concatenate([tracked, extra], axis=-2)
-        sides.append(tracked)
+        sides.append(np.concatenate([tracked, extra], axis=-2))
     diagnostics = {"nodes": total, "level_misses": misses, "worst_level_miss_m": worst_miss}
     return ContactTable(jnp.asarray(_prefilter(np.stack(sides), grid)), grid, surfaces,
                         radius), diagnostics
@@ -478,54 +544,58 @@ def _spline_weights(axis: Axis, x):
     return i.astype(jnp.int32), w
 
 
-def interpolate(table: ContactTable, side_index, lateral, yaw, roll):
-    """Fields (approach nodes, slots + 1, len(FIELDS)) at a pose from the quadratic
-    B-spline of the table along lateral, yaw and roll (C1): the 3 x 3 x 3 block of
-    coefficients around the pose, 27 of the table's ``rows`` in one gather (several
-    times cheaper than a 7-D slice), weighted by the product of the axes' weights."""
-    shape = table.shape
+def _pose_weights(table: ContactTable, side_index, lateral, yaw, roll):
+    """Nodes (27,) of the 3 x 3 x 3 block of B-spline coefficients around a pose (row
+    indices of ``table.heights``) and their weights (27,): the product of the quadratic
+    B-spline weights along lateral, yaw and roll (C1)."""
     index = jnp.asarray(side_index, dtype=jnp.int32)
     weight = jnp.ones(())
-    for axis, x, count in zip(_pose_axes(table.grid), (lateral, yaw, roll), shape[1:4]):
+    for axis, x, count in zip(_pose_axes(table.grid), (lateral, yaw, roll), table.shape[1:4]):
         start, w = _spline_weights(axis, x)
         offsets = jnp.arange(len(w), dtype=jnp.int32)
         index = (index * count)[..., None] + start + offsets
         weight = weight[..., None] * w
-    block = table.rows[index.reshape(-1)]
-    return (weight.reshape(-1) @ block).reshape(shape[4:])
+    return index.reshape(-1), weight.reshape(-1)
+
+
+def _bracket(heights, vertical):
+    """Index ``i`` of the levels ``i``, ``i + 1`` around the wheel's ``vertical`` position
+    [m] (``heights`` (A,) decreasing: the wheel lower at deeper levels; clamped to the
+    first and last pair) and the four levels ``i - 1 .. i + 2`` (clamped) that the
+    interpolation across the levels reads."""
+    count = heights.shape[0]
+    i = jnp.clip(jnp.sum(heights > vertical) - 1, 0, count - 2)
+    return i, jnp.clip(i + jnp.arange(-1, 3), 0, count - 1)
 
 
 def _along_levels(heights, fields, vertical, levels):
     """Per slot the depth [m] and the other fields at the wheel's ``vertical`` position
-    [m] from their values at the approach levels (``heights`` (L,) decreasing, the wheel
-    lower at deeper levels; ``fields`` (L, P, F)): the depth by cubic Hermite
-    interpolation in the vertical position between the two levels around it, from each
-    level's depth and slope (C1; beyond the first and last level, that level's line),
-    the other fields by Catmull-Rom interpolation in the level index."""
-    count = heights.shape[0]
-    below = jnp.sum(heights > vertical)  # levels above the wheel's position
-    i = jnp.clip(below - 1, 0, count - 2)
-    z0, z1 = heights[i], heights[i + 1]
-    t = jnp.clip((z0 - vertical) / (z0 - z1), 0.0, 1.0)
+    [m] from four consecutive approach levels (``heights`` (4,) of the levels ``i - 1 ..
+    i + 2`` around it, the wheel lower at deeper levels; ``fields`` (4, P, F); the
+    levels' depths ``levels`` (4,)): both by cubic Hermite interpolation in the vertical
+    position between the middle two (C1), the depth from each level's depth and slope
+    (beyond the first and last level, that level's line), the other fields with
+    tangents from their differences across the neighbouring levels (the levels are not
+    evenly spaced in height)."""
+    z0, z1 = heights[1], heights[2]
+    span = z0 - z1  # the wheel comes down by this from level i to i + 1
+    t = jnp.clip((z0 - vertical) / span, 0.0, 1.0)
     # No patch is deeper than the level's deepest depth, and none deepens faster than
     # the wheel comes down (guards against nodes where the search's refined depth jumps)
     slope = jnp.clip(fields[:, :, 1], 0.0, 1.0)
-    at_level = jnp.minimum(fields[:, :, 0] - fields[:, :, 1] * heights[:, None],
-                           levels[:, None])
-    span = z0 - z1  # the wheel comes down by this from level i to i + 1
+    at_level = jnp.minimum(fields[:, :, 0] - fields[:, :, 1] * heights[:, None], levels[:, None])
     h00, h10 = 2 * t ** 3 - 3 * t ** 2 + 1, t ** 3 - 2 * t ** 2 + t
     h01, h11 = -2 * t ** 3 + 3 * t ** 2, t ** 3 - t ** 2
-    hermite = (h00 * at_level[i] + h10 * span * slope[i] + h01 * at_level[i + 1]
-               + h11 * span * slope[i + 1])
-    first = at_level[0] + slope[0] * (heights[0] - vertical)
-    last = at_level[-1] + slope[-1] * (heights[-1] - vertical)
-    depth = jnp.where(vertical > heights[0], first,
-                      jnp.where(vertical < heights[-1], last, hermite))
-    # the other fields: Catmull-Rom in the level index (C1 in t, third order)
-    index = jnp.clip(i + jnp.arange(-1, 3), 0, count - 1)
-    w = 0.5 * jnp.stack([-t ** 3 + 2 * t ** 2 - t, 3 * t ** 3 - 5 * t ** 2 + 2,
-                         -3 * t ** 3 + 4 * t ** 2 + t, t ** 3 - t ** 2])
-    return depth, jnp.tensordot(w, fields[index], axes=1)
+    hermite = (h00 * at_level[1] + h10 * span * slope[1] + h01 * at_level[2]
+               + h11 * span * slope[2])
+    first = at_level[1] + slope[1] * (z0 - vertical)
+    last = at_level[2] + slope[2] * (z1 - vertical)
+    depth = jnp.where(vertical > z0, first, jnp.where(vertical < z1, last, hermite))
+    # the other fields: tangents (per unit of t) from the neighbouring levels' differences
+    tangent0 = (fields[2] - fields[0]) * (span / (heights[0] - heights[2]))
+    tangent1 = (fields[3] - fields[1]) * (span / (heights[1] - heights[3]))
+    other = h00 * fields[1] + h10 * tangent0 + h01 * fields[2] + h11 * tangent1
+    return depth, other
 
 
 def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset_position,
@@ -535,35 +605,49 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
     ``(P,)``), each patch's penetration interpolated between the approach levels in the
     wheel's vertical position (:func:`_along_levels`)."""
     side = jnp.asarray(side, dtype=jnp.float64)
-    lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes = relative_pose(
-        track, rail_offset, table.radius, wheelset_position, wheelset_rotation, side)
+    (lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, wheel_origin,
+     frame) = relative_pose(track, rail_offset, table.radius, wheelset_position,
+                            wheelset_rotation, side)
     side_index = jnp.where(side > 0.0, 0, 1).astype(jnp.int32)
-    slots = len(table.surfaces)
-    levels = interpolate(table, side_index, lateral, yaw, roll)
-    depth, fields = _along_levels(levels[:, slots, 0], levels[:, :slots], vertical,
-                                  jnp.asarray(table.grid.levels))
-    _, _, y_wheel, y_rail, s_wheel, dx, curvature = (fields[:, k] for k in range(len(FIELDS)))
+    slots, count = len(table.surfaces), table.shape[4]
+    nodes, weight = _pose_weights(table, side_index, lateral, yaw, roll)
+    heights = weight @ table.heights[nodes]
+    _, four = _bracket(heights, vertical)
+    block = table.rows[(nodes[:, None] * count + four).reshape(-1)].reshape(len(nodes), 4, -1)
+    # (as an einsum over (node, level) with the weights broadcast: XLA:CPU runs the same
+    # sum as a matrix product with the levels folded into the columns 2.4 times slower)
+    weights = jnp.broadcast_to(weight[:, None], (len(nodes), 4))
+    fields = jnp.einsum("nl,nlf->lf", weights, block).reshape(4, slots, len(FIELDS))
+    depth, fields = _along_levels(heights[four], fields, vertical,
+                                  jnp.asarray(table.grid.levels)[four])
+    _, _, y_wheel, y_rail, curvature = (fields[:, k] for k in range(len(FIELDS)))
     active = depth > 0.0
     penetration = jnp.where(active, depth, 0.0)
     surfaces = np.asarray(table.surfaces)
+
+    def geometry_at(surface, yw, yr):
+        # the wheel point as the search places it on the wheel in its actual pose
+        point, s_wheel = wheel_surface_point(surface, wheel.nominal_radius, yw, wheel_origin,
+                                             frame, side)
+        dx = (point - rail_origin) @ rail_axes[:, 0]
+        return dict(wheel_point=point, s_wheel=s_wheel, dx=dx,
+                    **contact_geometry(surface, rail, wheel.nominal_radius, yw, yr, dx,
+                                       rail_origin, rail_axes, side))
+
     parts = []
     for k, surface in enumerate(wheel.surfaces):  # each surface's slots (contiguous)
         mine = np.flatnonzero(surfaces == k)
-        parts.append(jax.vmap(lambda yw, yr, x: contact_geometry(
-            surface, rail, wheel.nominal_radius, yw, yr, x, rail_origin, rail_axes, side))(
-            y_wheel[mine], y_rail[mine], dx[mine]))
+        parts.append(jax.vmap(lambda yw, yr: geometry_at(surface, yw, yr))(
+            y_wheel[mine], y_rail[mine]))
     geometry = jax.tree.map(lambda *x: jnp.concatenate(x), *parts)
     return ContactPatches(
         active=active,
         penetration=penetration,
         surface=jnp.asarray(surfaces, dtype=jnp.int32),
         y_wheel=y_wheel,
-        s_wheel=s_wheel,
-        dx=dx,
         y_rail=y_rail,
         s_rail=jnp.full(y_wheel.shape, s_rail),
         y_track=side * (rail_offset + y_rail),
-        wheel_point=geometry["rail_point"] - penetration[:, None] * geometry["normal"],
         curvature_contact_y=curvature,
         **geometry,
     )
