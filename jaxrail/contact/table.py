@@ -284,7 +284,7 @@ def _pair(old, new, cost, limit):
 def _track_line(found, values, depth, surfaces, heights):
     """Slot-consistent values (L, P, F) and owned flags (L, P) of one lateral line:
     patches tracked along the lateral axis (:func:`_pair`, each track's next wheel
-    coordinate and depth offset also predicted from its last two nodes: on a conformal
+    coordinate, depth and slope also predicted from its last two nodes: on a conformal
     tread patches move several times their spacing per millimetre of shift), each
     surface's slots assigned in order of birth; empty slots continue the nearest value of
     their track, its depth (at each node's own ``heights`` (L,) [m]: the wheel's height
