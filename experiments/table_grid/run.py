@@ -7,7 +7,8 @@ each wheel pressed 0.06 mm into its rail) over shifts of +-8 mm, where the searc
 point moves less than 0.5 mm per 0.25 mm of shift and each wheel has one patch (the
 region ``tests/contact/test_table.py`` checks). Prints one JSON line per grid.
 
-Usage: ``python experiments/table_grid/run.py 1:20 base lateral roll approach approach4``.
+Usage: ``python experiments/table_grid/run.py 1:20 base lateral roll approach approach4
+approach5``.
 """
 
 import json
@@ -44,6 +45,8 @@ GRIDS = {
                           Axis.span(APPROACH.start, DEEPEST, APPROACH.step / 2)),
     "approach4": TableGrid(LATERAL, YAW, ROLL,
                            Axis.span(APPROACH.start, DEEPEST, APPROACH.step / 4)),
+    "approach5": TableGrid(LATERAL, YAW, ROLL,
+                           Axis.span(APPROACH.start, DEEPEST, APPROACH.step / 5)),
 }
 
 
