@@ -1,7 +1,7 @@
 """A progress bar of simulated seconds with the real-time factor.
 
 A railway engineer waiting for a 41 s run wants to read "12.3/41 s simulated, 0.7 x
-real time", not a percentage. :func:`jaxrail.simulation` draws it from the host between
+real time", not a percentage. :func:`jaxrail.simulate` draws it from the host between
 segments of the run (each a call of one compiled program), so the compiled programs
 hold no host callback and can be kept in JAX's persistent compilation cache.
 """

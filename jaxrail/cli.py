@@ -15,12 +15,12 @@ def _load_profile(name, inclination):
     return named_profile(name, inclination)
 
 
-GAUGE_MM = (600.0, 1700.0)  # [mm] track gauges from narrow (600 mm) to broad (1676 mm)
-
-
 def _check_gauge(gauge_mm):
-    """ValueError unless ``--gauge`` is a track gauge within :data:`GAUGE_MM`."""
-    low, high = GAUGE_MM
+    """ValueError unless ``--gauge`` [mm] is within the range of the ``track_gauge``
+    parameter (:mod:`jaxrail.vehicles.parameters`)."""
+    from .vehicles.parameters import PARAMETERS
+
+    low, high = (1e3 * x for x in PARAMETERS["track_gauge"].range)
     if not low <= gauge_mm <= high:  # also NaN
         raise ValueError(f"--gauge must be a track gauge within [{low:g}, {high:g}] mm, got "
                          f"{gauge_mm}")

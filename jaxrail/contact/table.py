@@ -381,6 +381,7 @@ def _match(found, values, depth, reference, owned, surfaces, rigid, height, refe
                        key=lambda j: reference[j, 2])
         mine = sorted((k for k in np.flatnonzero(found) if surfaces[k] == surface),
                       key=lambda k: values[k, 2])
+
         def cost(a, b):
             j, k = slots[a], mine[b]
             return _distance(_key(reference[j], reference_depth[j]), _key(values[k], depth[k]))
@@ -558,14 +559,14 @@ def _pose_weights(table: ContactTable, side_index, lateral, yaw, roll):
     return index.reshape(-1), weight.reshape(-1)
 
 
-def _bracket(heights, vertical):
-    """Index ``i`` of the levels ``i``, ``i + 1`` around the wheel's ``vertical`` position
-    [m] (``heights`` (A,) decreasing: the wheel lower at deeper levels; clamped to the
-    first and last pair) and the four levels ``i - 1 .. i + 2`` (clamped) that the
-    interpolation across the levels reads."""
+def _four_levels(heights, vertical):
+    """The four levels ``i - 1 .. i + 2`` (clamped) that the interpolation across the
+    levels reads, ``i`` and ``i + 1`` around the wheel's ``vertical`` position [m]
+    (``heights`` (A,) decreasing: the wheel lower at deeper levels; clamped to the first
+    and last pair)."""
     count = heights.shape[0]
     i = jnp.clip(jnp.sum(heights > vertical) - 1, 0, count - 2)
-    return i, jnp.clip(i + jnp.arange(-1, 3), 0, count - 1)
+    return jnp.clip(i + jnp.arange(-1, 3), 0, count - 1)
 
 
 def _along_levels(heights, fields, vertical, levels):
@@ -612,7 +613,7 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
     slots, count = len(table.surfaces), table.shape[4]
     nodes, weight = _pose_weights(table, side_index, lateral, yaw, roll)
     heights = weight @ table.heights[nodes]
-    _, four = _bracket(heights, vertical)
+    four = _four_levels(heights, vertical)
     block = table.rows[(nodes[:, None] * count + four).reshape(-1)].reshape(len(nodes), 4, -1)
     # (as an einsum over (node, level) with the weights broadcast: XLA:CPU runs the same
     # sum as a matrix product with the levels folded into the columns 2.4 times slower)

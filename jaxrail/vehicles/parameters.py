@@ -134,6 +134,7 @@ PARAMETERS = {p.name: p for p in [
       for family in ("primary", "secondary") for axis, column in _AXES.items()],
     *[_bushing(family, "damping", column, "N s/m", f"{axis} damping", (0.0, 1e8))
       for family in ("primary", "secondary") for axis, column in _AXES.items()],
+    # track gauges from narrow (600 mm) to broad (1676 mm)
     Parameter("track_gauge", "m", "distance between the rails' gauge points, 14 mm below "
               "their tops", _gauge_get, _gauge_set, (0.6, 1.7)),
     Parameter("wheelbase", "m", "axle spacing of each bogie", _wheelbase_get,
