@@ -195,6 +195,40 @@ def _segment_moments(weights, depth, y_grid, origin):
     return jnp.sum(m0), jnp.sum(m1), jnp.sum(m2)
 
 
+def wide_point(y_deepest, centre, breadth):
+    """Contact point [m] of a patch and its blend factor: its deepest point
+    ``y_deepest`` [m] if it is narrower than ``WIDE_FROM``, the centre of its
+    interpenetration ``centre`` [m] if wider than ``WIDE_FULL``, blended linearly in
+    its ``breadth`` [m] between."""
+    blend = jnp.clip((breadth - WIDE_FROM) / (WIDE_FULL - WIDE_FROM), 0.0, 1.0)
+    return y_deepest + blend * (centre - y_deepest), blend
+
+
+def overlap_density(weights: Float[Array, " n"], depth: Float[Array, " n"], y_grid: Float[Array, " n"],
+                    y_deepest):
+    """Centre, breadth and overlap curvature of a patch's share of the interpenetration.
+
+    Arguments as :func:`overlap_centre`. Returns ``(centre, breadth, curvature)``: the
+    lateral coordinate of the centroid of the weight density [m] (``y_deepest`` where
+    the patch has no weight), its area over its largest value [m], and the relative
+    lateral curvature [1/m] a parabolic gap would need to overlap as widely,
+    ``2 delta / w^2`` with the half-width ``w^2 = 5 variance`` of the density and
+    ``delta`` its largest value.
+    """
+    m0, m1, m2 = _segment_moments(weights, depth, y_grid, y_deepest)
+    # the largest weight by its index, not jnp.max: max's derivative divides by the count
+    # of entries equal to it, which XLA can make zero by computing the two differently
+    peak = weights[jnp.argmax(weights)]
+    some = (m0 > 0.0) & (peak > 0.0)
+    safe_m0 = jnp.where(some, m0, 1.0)
+    breadth = jnp.where(some, m0 / jnp.where(some, peak, 1.0), 0.0)
+    offset = m1 / safe_m0
+    variance = m2 / safe_m0 - offset**2
+    spread = some & (variance > 0.0)
+    curvature = jnp.where(spread, 0.4 * peak / jnp.where(spread, variance, 1.0), 0.0)
+    return y_deepest + offset, breadth, curvature
+
+
 def overlap_centre(weights: Float[Array, " n"], depth: Float[Array, " n"], y_grid: Float[Array, " n"],
                    y_deepest):
     """Contact point and overlap curvature of a patch from its strip weights.
@@ -211,23 +245,12 @@ def overlap_centre(weights: Float[Array, " n"], depth: Float[Array, " n"], y_gri
         depth: signed depth of each strip [m]; y_grid: strip coordinates [m].
         y_deepest: refined deepest point of the patch [m].
 
-    Returns ``(y, blend, curvature)``: the lateral coordinate of the contact point [m],
-    the blend factor from deepest point (0, narrower than ``WIDE_FROM``) to centre
-    (1, wider than ``WIDE_FULL``), and the relative lateral curvature [1/m] a
-    parabolic gap would need to overlap as widely, ``2 delta / w^2`` with the half-width
-    ``w^2 = 5 variance`` of the density and ``delta`` its largest value.
+    Returns ``(y, blend, curvature)``: the lateral coordinate of the contact point [m]
+    and the blend factor (:func:`wide_point`), and the overlap curvature [1/m]
+    (:func:`overlap_density`).
     """
-    m0, m1, m2 = _segment_moments(weights, depth, y_grid, y_deepest)
-    peak = jnp.max(weights)
-    some = (m0 > 0.0) & (peak > 0.0)
-    safe_m0 = jnp.where(some, m0, 1.0)
-    breadth = jnp.where(some, m0 / jnp.where(some, peak, 1.0), 0.0)
-    blend = jnp.clip((breadth - WIDE_FROM) / (WIDE_FULL - WIDE_FROM), 0.0, 1.0)
-    offset = m1 / safe_m0
-    variance = m2 / safe_m0 - offset**2
-    spread = some & (variance > 0.0)
-    curvature = jnp.where(spread, 0.4 * peak / jnp.where(spread, variance, 1.0), 0.0)
-    return y_deepest + blend * offset, blend, curvature
+    centre, breadth, curvature = overlap_density(weights, depth, y_grid, y_deepest)
+    return *wide_point(y_deepest, centre, breadth), curvature
 
 
 SECANT_SPAN = 1.0e-3  # [m] half-span (arc length) of the secant curvature of a narrow patch

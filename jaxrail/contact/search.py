@@ -21,10 +21,12 @@ from jaxtyping import Array, Bool, Float, Int
 
 from ..profiles._base import Profile, WheelProfile
 from ..track import project, rail_frame
-from .patches import SECANT_SPAN, find_patches, overlap_centre, refine_maximum, secant_curvature
+from .patches import (SECANT_SPAN, find_patches, overlap_density, refine_maximum, secant_curvature,
+                      wide_point)
 from .strip import strip_point, wheel_frame
 
 HALF_TAPING_DISTANCE = 0.75  # [m] taping lines 1500 mm apart (back-to-back 1360 mm)
+PARTS = ("y_deepest", "centre", "breadth")  # of a patch's contact point (search_wheel_parts)
 
 
 class SearchConfig(eqx.Module):
@@ -132,8 +134,9 @@ def _surface_patches(surface, surface_index, wheel, rail, geometry, config, slot
     index, active, keep, weights = find_patches(strips.depth, slots)
     depth_fn = lambda y: point(y, False).depth  # noqa: E731
     y_star = jax.vmap(lambda i: refine_maximum(depth_fn, y_grid, strips.depth, i, surface.domain))(index)
-    y_contact, blend, overlap = jax.vmap(lambda w, y: overlap_centre(w, strips.depth, y_grid, y))(
+    centre, breadth, overlap = jax.vmap(lambda w, y: overlap_density(w, strips.depth, y_grid, y))(
         weights, y_star)
+    y_contact, blend = wide_point(y_star, centre, breadth)
     depth = keep * jax.vmap(depth_fn)(y_star)
     stretch = 1.0 + jax.vmap(surface.slope)(y_star) ** 2  # (arc length / wheel coordinate)^2
     secant = jax.vmap(lambda y, k: secant_curvature(depth_fn, y, surface.domain, SECANT_SPAN / jnp.sqrt(k)))(
@@ -142,7 +145,8 @@ def _surface_patches(surface, surface_index, wheel, rail, geometry, config, slot
     _, _, rail_origin, rail_axes, side = geometry
     data = lambda *args: _contact_data(surface, surface_index, wheel, rail, point, *args,  # noqa: E731
                                        rail_origin, rail_axes, side)
-    return jax.vmap(data)(y_contact, active, depth, narrow + blend * (overlap - narrow))
+    out = jax.vmap(data)(y_contact, active, depth, narrow + blend * (overlap - narrow))
+    return dict(out, **{PARTS[0]: y_star, PARTS[1]: centre, PARTS[2]: breadth})
 
 
 def _surface_deepest(surface, wheel, rail, geometry, config):
@@ -230,6 +234,16 @@ def search_wheel(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelse
 
     Returns :class:`ContactPatches` with leading shape ``(P,)``.
     """
+    return search_wheel_parts(wheel, rail, track, rail_offset, wheelset_position,
+                              wheelset_rotation, side, config, s_guess)[0]
+
+
+def search_wheel_parts(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelset_position,
+                       wheelset_rotation, side, config: SearchConfig = SearchConfig(),
+                       s_guess=None) -> tuple[ContactPatches, dict]:
+    """:func:`search_wheel` and the parts each patch's contact point is made of (:data:`PARTS`,
+    each (P,) [m]): the refined deepest point, the centre of the interpenetration and its
+    breadth, from which :func:`jaxrail.contact.patches.wide_point` places the point."""
     side = jnp.asarray(side, dtype=jnp.float64)
     s_rail, geometry = _wheel_geometry(track, rail_offset, wheelset_position, wheelset_rotation,
                                        side, s_guess)
@@ -237,10 +251,11 @@ def search_wheel(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelse
     parts = [_surface_patches(s, k, wheel, rail, geometry, config, config.max_patches)
              for k, s in enumerate(wheel.surfaces)]
     data = {key: jnp.concatenate([part[key] for part in parts]) for key in parts[0]}
+    located = {key: data.pop(key) for key in PARTS}
     data["surface"] = data["surface"].astype(jnp.int32)
     data["s_rail"] = jnp.full((slots,), s_rail)
     data["y_track"] = side * (rail_offset + data["y_rail"])
-    return ContactPatches(**data)
+    return ContactPatches(**data), located
 
 
 def deepest_depth(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelset_position,
