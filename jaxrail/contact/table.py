@@ -13,18 +13,22 @@ A :class:`ContactTable` holds, for each rail (left, right) and each node of a gr
 (lateral, yaw, roll), what the paper's search (:func:`jaxrail.contact.search_wheel`)
 finds with the wheel lowered until its deepest patch penetrates each depth of the
 approach axis: the wheel's vertical position there and, per patch slot, the signed
-depth and its derivative in ``vertical``, the contact point on the wheel and rail
-profiles, and the Hertz curvature of the patch. Patches are tracked along the lateral
+depth, the parts the search places the contact point from (the patch's deepest point,
+the centre and breadth of its interpenetration), the rail point's offset from it on the
+profiles and the Hertz curvature of the patch, each with its derivative in
+``vertical`` (forward-mode, through the search). Patches are tracked along the lateral
 axis at build time (in order along the wheel: two patches of one surface cannot pass
 each other), so that a slot holds the same patch from node to node and interpolation
 does not mix two patches.
 
 Lookups interpolate every field with a quadratic B-spline through the nodes along
 lateral, yaw and roll (C1, one block of 3 x 3 x 3 coefficients), first the wheel's
-vertical position at the levels, then the slots at the four levels around the wheel's
-actual position, and along those levels by cubic Hermite interpolation in the vertical
-position: each patch's depth from its depth and slope at the two levels around it, the
-other fields with tangents from the neighbouring levels. They derive the rest of
+vertical position at the levels, then the slots at the two levels around the wheel's
+actual position, and between them by cubic Hermite interpolation in the vertical
+position from each field's values and derivatives there. They place the contact point
+from its parts as the search does (:func:`jaxrail.contact.patches.wide_point`): on the
+conformal UIC60 1:20 tread the point moves 15-35 um per um of depth and its rate jumps
+where the blend starts and ends, which the parts do not. They derive the rest of
 :class:`jaxrail.contact.ContactPatches` as the search does, from the wheel's actual
 pose and the profiles at the interpolated points: the wheel point on the wheel's strip
 (eq. 12; the creepages are taken between it and the rail point, so its height matters
@@ -41,12 +45,19 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..track import project, rail_frame, straight_track
+from .patches import wide_point
 from .search import (HALF_TAPING_DISTANCE, ContactPatches, SearchConfig, contact_geometry,
-                     deepest_depth, search_wheel)
+                     deepest_depth, search_wheel_parts)
 from .strip import wheel_frame, wheel_surface_point
 
-GEOMETRY = ("y_wheel", "y_rail", "curvature_contact_y")  # a slot's contact
-FIELDS = ("depth_offset", "depth_slope") + GEOMETRY
+# A slot's contact point as the search makes it (its deepest point, the centre and
+# breadth of its interpenetration: the point is blended from the first two by the
+# breadth), the rail point's offset from it on the profiles and the Hertz curvature
+GEOMETRY = ("y_deepest", "centre", "breadth", "rail_from_wheel", "curvature_contact_y")
+# each slot's depth as a line in the wheel's height, the geometry, and the geometry's
+# rates [per m the wheel comes down]: the tangents of the interpolation across levels
+FIELDS = ("depth_offset", "depth_slope") + GEOMETRY + tuple(f"{name}_rate" for name in GEOMETRY)
+_WHERE = len(FIELDS)  # at build time only: the contact point y_wheel [m], for tracking
 _CLEAR = 1.0e-3  # [m] slots that never hold a patch: this far clear of the rail
 # [m] per node: where its patch has gone, a slot's depth falls below the rail within one
 # node and on by the patch's own trend (no kink for the spline to ring at), at least
@@ -85,7 +96,11 @@ class TableGrid(eqx.Module):
     """Grid of a contact table: lateral [m], yaw [rad] and roll [rad] axes, and the
     approach axis in the square root of the deepest patch's depth [m^0.5] (the search
     runs at the depths ``approach.nodes ** 2``: denser where a conformal patch's
-    contact point moves fastest with the depth, near first contact)."""
+    contact point moves fastest with the depth, near first contact). Conformal contact
+    is sensitive to roll (on UIC60 1:20 the S1002 contact point moves up to 1.5 mm per
+    mrad): half-way between the default roll nodes the table is up to 0.34 mm (1:20)
+    and 0.054 mm (1:40) off the search, with a 2.5 mrad step 0.021 and 0.003 mm
+    (docs/contact-table.md)."""
 
     lateral: Axis = Axis.span(-0.016, 0.016, 1.0e-4)
     yaw: Axis = Axis.span(-0.01, 0.01, 0.005)
@@ -182,8 +197,9 @@ def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, le
     """The search at one node (lateral [m], yaw [rad], roll [rad]) of the ``side`` rail
     with the wheel lowered until its deepest patch penetrates each of the ``levels`` [m].
 
-    Returns ``(found (L, P), values (L, P, len(FIELDS)), depth (L, P), heights (L,),
-    miss)``: the slots holding a patch, their fields, their signed depths, the wheel's
+    Returns ``(found (L, P), values (L, P, len(FIELDS) + 1), depth (L, P), heights (L,),
+    miss)``: the slots holding a patch, their fields and contact point (``_WHERE``),
+    their signed depths, the wheel's
     vertical position [m] at each level, and the largest error [m] of the deepest depth
     against its level."""
     track = straight_track(100.0)
@@ -211,19 +227,23 @@ def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, le
         return z, residual(z, depth)
 
     def slots(z):
-        patches = search_wheel(wheel, rail, track, rail_offset, *pose(z), side, config)
+        patches, parts = search_wheel_parts(wheel, rail, track, rail_offset, *pose(z), side, config)
         geometric = jnp.einsum("pi,pi->p", patches.rail_point - patches.wheel_point, patches.normal)
-        return jnp.where(patches.active, patches.penetration, geometric), patches
+        named = dict(parts, rail_from_wheel=patches.y_rail - patches.y_wheel,
+                     curvature_contact_y=patches.curvature_contact_y)
+        geometry = jnp.stack([named[name] for name in GEOMETRY], -1)
+        return jnp.where(patches.active, patches.penetration, geometric), geometry, patches
 
     def level(z):
-        (signed, patches), (d_signed, _) = jax.jvp(slots, (z,), (jnp.ones_like(z),))
+        (signed, geometry, patches), (d_signed, d_geometry, _) = jax.jvp(
+            slots, (z,), (jnp.ones_like(z),))
         # A slot is a patch when the search found it (active) or it is a near candidate;
         # empty slots point at the first strip of their surface.
         empty = patches.y_wheel == first_strip[patches.surface]
         found = patches.active | ((signed > -_CANDIDATE) & (signed <= 0.0) & ~empty)
         slope = -d_signed  # the depth grows as the wheel comes down
-        values = jnp.stack([signed + slope * z, slope]
-                           + [getattr(patches, name) for name in GEOMETRY], axis=-1)
+        values = jnp.concatenate([jnp.stack([signed + slope * z, slope], -1), geometry, -d_geometry,
+                                  patches.y_wheel[:, None]], axis=-1)
         return found, values
 
     heights, misses = [], []
@@ -257,8 +277,8 @@ def _distance(a, b):
 
 
 def _key(value, depth):
-    """(wheel coordinate, depth, depth slope) of a patch's values (F,) and depth [m]."""
-    return np.array([value[2], depth, value[1]])
+    """(wheel coordinate, depth, depth slope) of a patch's values (F + 1,) and depth [m]."""
+    return np.array([value[_WHERE], depth, value[1]])
 
 
 def _pair(old, new, cost, limit):
@@ -301,7 +321,7 @@ def _track_line(found, values, depth, surfaces, heights):
                             if track[0] == surface and track[4] == i - 1),
                            key=lambda t: tracks[t][2][0])
             mine = sorted((k for k in np.flatnonzero(found[i]) if surfaces[k] == surface),
-                          key=lambda k: values[i, k, 2])
+                          key=lambda k: values[i, k, _WHERE])
 
             def cost(a, b):
                 _, _, last, before, _ = tracks[alive[a]]
@@ -334,7 +354,7 @@ def _track_line(found, values, depth, surfaces, heights):
             owner[i, free[0]] = len(tracks) - 1
             out[i, free[0]] = values[i, k]
             held[i, free[0]] = depth[i, k]
-    clear = np.zeros(len(FIELDS))
+    clear = np.zeros(values.shape[-1])
     clear[0] = -_CLEAR
     for j in range(p):
         have = np.flatnonzero(owner[:, j] >= 0)
@@ -378,9 +398,9 @@ def _match(found, values, depth, reference, owned, surfaces, rigid, height, refe
     reference_depth = reference[:, 0] - reference[:, 1] * (height if rigid else reference_height)
     for surface in sorted(set(surfaces)):
         slots = sorted((j for j in range(len(owned)) if surfaces[j] == surface and owned[j]),
-                       key=lambda j: reference[j, 2])
+                       key=lambda j: reference[j, _WHERE])
         mine = sorted((k for k in np.flatnonzero(found) if surfaces[k] == surface),
-                      key=lambda k: values[k, 2])
+                      key=lambda k: values[k, _WHERE])
 
         def cost(a, b):
             j, k = slots[a], mine[b]
@@ -438,6 +458,27 @@ def _assign_slots(found, values, depth, heights, surfaces):
     return out
 
 
+def _limit_rates(values, heights):
+    """``values`` (L, Y, R, A, P, F) with each geometry rate no larger than three times
+    the field's change per metre of height to either neighbouring level (the
+    Fritsch-Carlson bound: the Hermite interpolation between two levels then does not
+    overshoot them; ``heights`` (L, Y, R, A) [m]). The search's rates are exact but
+    unbounded where a patch is born (the centre of a vanishing interpenetration moves
+    without limit) or its deepest point lies on a flat top; they bound the others only
+    where the field is flat or turns between levels."""
+    count = len(GEOMETRY)
+    value, rate = values[..., 2:2 + count], values[..., 2 + count:]
+    # how far the wheel comes down from each level to the next [m]
+    drop = np.maximum(heights[..., :-1] - heights[..., 1:], 1e-12)[..., None, None]
+    secant = np.abs(np.diff(value, axis=3)) / drop
+    bound = np.full(value.shape, np.inf)
+    bound[..., :-1, :, :] = np.minimum(bound[..., :-1, :, :], secant)
+    bound[..., 1:, :, :] = np.minimum(bound[..., 1:, :, :], secant)
+    out = values.copy()
+    out[..., 2 + count:] = np.clip(rate, -3.0 * bound, 3.0 * bound)
+    return out
+
+
 def _search_side(wheel, rail, rail_offset, config, grid, side, chunk, progress):
     """The search at every node of ``grid`` for the ``side`` rail, in compiled batches of
     ``chunk`` nodes: found (L, Y, R, A, P), values (L, Y, R, A, P, F), depth (L, Y, R,
@@ -487,7 +528,8 @@ def build_contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchC
                                                            side, chunk, report)
         worst_miss = max(worst_miss, float(np.max(miss)))
         misses += int(np.sum(miss > _LEVEL_TOLERANCE))
-        tracked = _assign_slots(found, values, depth, heights, surfaces)
+        tracked = _limit_rates(_assign_slots(found, values, depth, heights, surfaces)[..., :_WHERE],
+                               heights)
         # the wheel's vertical position at each level as one more slot (first field)
         extra = np.zeros(heights.shape + (1, len(FIELDS)))
         extra[..., 0, 0] = heights
@@ -559,26 +601,22 @@ def _pose_weights(table: ContactTable, side_index, lateral, yaw, roll):
     return index.reshape(-1), weight.reshape(-1)
 
 
-def _four_levels(heights, vertical):
-    """The four levels ``i - 1 .. i + 2`` (clamped) that the interpolation across the
-    levels reads, ``i`` and ``i + 1`` around the wheel's ``vertical`` position [m]
-    (``heights`` (A,) decreasing: the wheel lower at deeper levels; clamped to the first
-    and last pair)."""
-    count = heights.shape[0]
-    i = jnp.clip(jnp.sum(heights > vertical) - 1, 0, count - 2)
-    return jnp.clip(i + jnp.arange(-1, 3), 0, count - 1)
+def _two_levels(heights, vertical):
+    """The levels ``i, i + 1`` around the wheel's ``vertical`` position [m] (``heights``
+    (A,) decreasing: the wheel lower at deeper levels; the first or last pair beyond
+    them)."""
+    i = jnp.clip(jnp.sum(heights > vertical) - 1, 0, heights.shape[0] - 2)
+    return i + jnp.arange(2)
 
 
 def _along_levels(heights, fields, vertical, levels):
-    """Per slot the depth [m] and the other fields at the wheel's ``vertical`` position
-    [m] from four consecutive approach levels (``heights`` (4,) of the levels ``i - 1 ..
-    i + 2`` around it, the wheel lower at deeper levels; ``fields`` (4, P, F); the
-    levels' depths ``levels`` (4,)): both by cubic Hermite interpolation in the vertical
-    position between the middle two (C1), the depth from each level's depth and slope
-    (beyond the first and last level, that level's line), the other fields with
-    tangents from their differences across the neighbouring levels (the levels are not
-    evenly spaced in height)."""
-    z0, z1 = heights[1], heights[2]
+    """Per slot the depth [m] and the geometry (:data:`GEOMETRY`) at the wheel's
+    ``vertical`` position [m] from the two approach levels around it (``heights`` (2,),
+    the wheel lower at the second; ``fields`` (2, P, F); their depths ``levels`` (2,)),
+    by cubic Hermite interpolation in the vertical position (C1): the depth from each
+    level's depth and slope (beyond the levels, the nearer level's line), the geometry
+    from its values and rates (beyond the levels, the nearer level's values)."""
+    z0, z1 = heights[0], heights[1]
     span = z0 - z1  # the wheel comes down by this from level i to i + 1
     t = jnp.clip((z0 - vertical) / span, 0.0, 1.0)
     # No patch is deeper than the level's deepest depth, and none deepens faster than
@@ -587,16 +625,15 @@ def _along_levels(heights, fields, vertical, levels):
     at_level = jnp.minimum(fields[:, :, 0] - fields[:, :, 1] * heights[:, None], levels[:, None])
     h00, h10 = 2 * t ** 3 - 3 * t ** 2 + 1, t ** 3 - 2 * t ** 2 + t
     h01, h11 = -2 * t ** 3 + 3 * t ** 2, t ** 3 - t ** 2
-    hermite = (h00 * at_level[1] + h10 * span * slope[1] + h01 * at_level[2]
-               + h11 * span * slope[2])
-    first = at_level[1] + slope[1] * (z0 - vertical)
-    last = at_level[2] + slope[2] * (z1 - vertical)
+    hermite = (h00 * at_level[0] + h10 * span * slope[0] + h01 * at_level[1]
+               + h11 * span * slope[1])
+    first = at_level[0] + slope[0] * (z0 - vertical)
+    last = at_level[1] + slope[1] * (z1 - vertical)
     depth = jnp.where(vertical > z0, first, jnp.where(vertical < z1, last, hermite))
-    # the other fields: tangents (per unit of t) from the neighbouring levels' differences
-    tangent0 = (fields[2] - fields[0]) * (span / (heights[0] - heights[2]))
-    tangent1 = (fields[3] - fields[1]) * (span / (heights[1] - heights[3]))
-    other = h00 * fields[1] + h10 * tangent0 + h01 * fields[2] + h11 * tangent1
-    return depth, other
+    count = len(GEOMETRY)
+    value, rate = fields[:, :, 2:2 + count], fields[:, :, 2 + count:]
+    geometry = (h00 * value[0] + h10 * span * rate[0] + h01 * value[1] + h11 * span * rate[1])
+    return depth, geometry
 
 
 def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset_position,
@@ -613,15 +650,18 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
     slots, count = len(table.surfaces), table.shape[4]
     nodes, weight = _pose_weights(table, side_index, lateral, yaw, roll)
     heights = weight @ table.heights[nodes]
-    four = _four_levels(heights, vertical)
-    block = table.rows[(nodes[:, None] * count + four).reshape(-1)].reshape(len(nodes), 4, -1)
+    two = _two_levels(heights, vertical)
+    block = table.rows[(nodes[:, None] * count + two).reshape(-1)].reshape(len(nodes), 2, -1)
     # (as an einsum over (node, level) with the weights broadcast: XLA:CPU runs the same
     # sum as a matrix product with the levels folded into the columns 2.4 times slower)
-    weights = jnp.broadcast_to(weight[:, None], (len(nodes), 4))
-    fields = jnp.einsum("nl,nlf->lf", weights, block).reshape(4, slots, len(FIELDS))
-    depth, fields = _along_levels(heights[four], fields, vertical,
-                                  jnp.asarray(table.grid.levels)[four])
-    _, _, y_wheel, y_rail, curvature = (fields[:, k] for k in range(len(FIELDS)))
+    weights = jnp.broadcast_to(weight[:, None], (len(nodes), 2))
+    fields = jnp.einsum("nl,nlf->lf", weights, block).reshape(2, slots, len(FIELDS))
+    depth, geometry = _along_levels(heights[two], fields, vertical,
+                                    jnp.asarray(table.grid.levels)[two])
+    y_deepest, centre, breadth, rail_from_wheel, curvature = (
+        geometry[:, k] for k in range(len(GEOMETRY)))
+    y_wheel, _ = wide_point(y_deepest, centre, breadth)  # as the search places it
+    y_rail = y_wheel + rail_from_wheel
     active = depth > 0.0
     penetration = jnp.where(active, depth, 0.0)
     surfaces = np.asarray(table.surfaces)
