@@ -47,6 +47,8 @@ GRIDS = {
                            Axis.span(APPROACH.start, DEEPEST, APPROACH.step / 4)),
     "approach5": TableGrid(LATERAL, YAW, ROLL,
                            Axis.span(APPROACH.start, DEEPEST, APPROACH.step / 5)),
+    "approach_coarse": TableGrid(LATERAL, YAW, ROLL,
+                                 Axis.span(APPROACH.start, DEEPEST, APPROACH.step * 2)),
 }
 
 

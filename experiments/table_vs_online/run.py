@@ -46,9 +46,11 @@ def compare(online, table):
     ratio = [np.nanmax(np.abs(derailment_ratio(r)[valid])) for r in (online, table)]
     summaries = [summarize(r) for r in (online, table)]
     intervals = [s["wheels"][OUTER]["multi_patch_intervals_s"] for s in summaries]
+    difference = np.abs(lateral[0] - lateral[1])
+    worst = int(np.argmax(np.where(valid, difference, -1.0)))
     return {
-        "max_leading_lateral_difference_mm": float(1e3 * np.max(np.abs(
-            lateral[0][valid] - lateral[1][valid]))),
+        "max_leading_lateral_difference_mm": float(1e3 * difference[worst]),
+        "max_leading_lateral_difference_at_s": float(np.asarray(online.t)[worst]),
         "outer_max_normal_force_N": [float(np.max(f[valid])) for f in force],
         "outer_max_normal_force_difference_percent": float(
             100 * (np.max(force[1][valid]) / np.max(force[0][valid]) - 1)),
