@@ -146,7 +146,7 @@ def _surface_patches(surface, surface_index, wheel, rail, geometry, config, slot
     data = lambda *args: _contact_data(surface, surface_index, wheel, rail, point, *args,  # noqa: E731
                                        rail_origin, rail_axes, side)
     out = jax.vmap(data)(y_contact, active, depth, narrow + blend * (overlap - narrow))
-    return dict(out, **{PARTS[0]: y_star, PARTS[1]: centre, PARTS[2]: breadth})
+    return dict(out, **dict(zip(PARTS, (y_star, centre, breadth))))
 
 
 def _surface_deepest(surface, wheel, rail, geometry, config):

@@ -57,6 +57,8 @@ GEOMETRY = ("y_deepest", "centre", "breadth", "rail_from_wheel", "curvature_cont
 # each slot's depth as a line in the wheel's height, the geometry, and the geometry's
 # rates [per m the wheel comes down]: the tangents of the interpolation across levels
 FIELDS = ("depth_offset", "depth_slope") + GEOMETRY + tuple(f"{name}_rate" for name in GEOMETRY)
+_VALUES = slice(2, 2 + len(GEOMETRY))  # the geometry's columns of FIELDS
+_RATES = slice(2 + len(GEOMETRY), len(FIELDS))  # and its rates'
 _WHERE = len(FIELDS)  # at build time only: the contact point y_wheel [m], for tracking
 _CLEAR = 1.0e-3  # [m] slots that never hold a patch: this far clear of the rail
 # [m] per node: where its patch has gone, a slot's depth falls below the rail within one
@@ -466,16 +468,14 @@ def _limit_rates(values, heights):
     unbounded where a patch is born (the centre of a vanishing interpenetration moves
     without limit) or its deepest point lies on a flat top; they bound the others only
     where the field is flat or turns between levels."""
-    count = len(GEOMETRY)
-    value, rate = values[..., 2:2 + count], values[..., 2 + count:]
     # how far the wheel comes down from each level to the next [m]
     drop = np.maximum(heights[..., :-1] - heights[..., 1:], 1e-12)[..., None, None]
-    secant = np.abs(np.diff(value, axis=3)) / drop
-    bound = np.full(value.shape, np.inf)
-    bound[..., :-1, :, :] = np.minimum(bound[..., :-1, :, :], secant)
+    secant = np.abs(np.diff(values[..., _VALUES], axis=3)) / drop
+    bound = np.full(secant.shape[:3] + (secant.shape[3] + 1,) + secant.shape[4:], np.inf)
+    bound[..., :-1, :, :] = secant
     bound[..., 1:, :, :] = np.minimum(bound[..., 1:, :, :], secant)
     out = values.copy()
-    out[..., 2 + count:] = np.clip(rate, -3.0 * bound, 3.0 * bound)
+    out[..., _RATES] = np.clip(values[..., _RATES], -3.0 * bound, 3.0 * bound)
     return out
 
 
@@ -630,8 +630,7 @@ def _along_levels(heights, fields, vertical, levels):
     first = at_level[0] + slope[0] * (z0 - vertical)
     last = at_level[1] + slope[1] * (z1 - vertical)
     depth = jnp.where(vertical > z0, first, jnp.where(vertical < z1, last, hermite))
-    count = len(GEOMETRY)
-    value, rate = fields[:, :, 2:2 + count], fields[:, :, 2 + count:]
+    value, rate = fields[:, :, _VALUES], fields[:, :, _RATES]
     geometry = (h00 * value[0] + h10 * span * rate[0] + h01 * value[1] + h11 * span * rate[1])
     return depth, geometry
 
@@ -656,10 +655,10 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
     # sum as a matrix product with the levels folded into the columns 2.4 times slower)
     weights = jnp.broadcast_to(weight[:, None], (len(nodes), 2))
     fields = jnp.einsum("nl,nlf->lf", weights, block).reshape(2, slots, len(FIELDS))
-    depth, geometry = _along_levels(heights[two], fields, vertical,
-                                    jnp.asarray(table.grid.levels)[two])
+    depth, interpolated = _along_levels(heights[two], fields, vertical,
+                                        jnp.asarray(table.grid.levels)[two])
     y_deepest, centre, breadth, rail_from_wheel, curvature = (
-        geometry[:, k] for k in range(len(GEOMETRY)))
+        interpolated[:, k] for k in range(len(GEOMETRY)))
     y_wheel, _ = wide_point(y_deepest, centre, breadth)  # as the search places it
     y_rail = y_wheel + rail_from_wheel
     active = depth > 0.0
