@@ -271,6 +271,12 @@ def _datasets(result, body_names):
         "wheelset/yaw": (floats(result.wheelset_yaw), "rad",
                          ("wheelset yaw relative to the track, positive anticlockwise "
                           f"seen from above; {wheelset_axes}"), wheelset_text),
+        "track/irregularity": (
+            floats(result.irregularity), "m",
+            ("the track's irregularity at each wheelset: alignment (positive left), vertical "
+             "level (positive up), cross level (left rail over right) and gauge deviation "
+             "(positive wider), zeros on an ideal track (docs/track.md); axes: time, "
+             "wheelset (index 0 = leading), channel"), "time, wheelset, channel"),
         "bodies/q": (q.reshape(len(t), n, 7), "m (x, y, z); 1 (e0, e1, e2, e3)",
                      "body coordinates; axes: time, body, component. " + _BODY_CONVENTION,
                      "time, body, component"),

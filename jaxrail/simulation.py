@@ -17,6 +17,7 @@ chose them are in docs/simulation.md.
 
 import dataclasses
 import time
+import warnings
 
 import diffrax
 import equinox as eqx
@@ -30,6 +31,7 @@ from ._progress import SimulatedTimeBar
 from .multibody import constraints, simulate_system
 from .multibody.imex import IMEX
 from .track import to_track_coordinates, track_frame
+from .track.rails import HALF_TAPING_DISTANCE, track_irregularity
 from .vehicles.initial import initial_state
 from .vehicles.loads import VehicleLoads, contact_loads, resolve_contact_model
 from .vehicles.vehicle import Vehicle, VehicleParams, wheelset_states
@@ -141,7 +143,11 @@ class SimulationResult(eqx.Module):
         t (T,) [s]; q, qdot (T, 7 n): body states (jaxrail.multibody conventions);
         valid (T,): output times the run reached (False after an early stop);
         wheelset_lateral, wheelset_vertical, wheelset_yaw (T, W): wheelset centre
-            relative to the track centreline [m] and yaw relative to the track [rad];
+            relative to the design track centreline [m] and yaw relative to the track
+            [rad];
+        irregularity (T, W, 4): the track's irregularity channels at each wheelset
+            (alignment, vertical level, cross level, gauge; :mod:`jaxrail.track.irregularity`)
+            [m], zeros on an ideal track;
         wheels: :class:`WheelOutputs`;
         constraint_violation (T,): max |Phi| over the joint rows;
         result: diffrax's result code; derailed: the derailment event fired;
@@ -156,6 +162,7 @@ class SimulationResult(eqx.Module):
     wheelset_lateral: jax.Array
     wheelset_vertical: jax.Array
     wheelset_yaw: jax.Array
+    irregularity: jax.Array
     wheels: WheelOutputs
     constraint_violation: jax.Array
     result: jax.Array
@@ -185,19 +192,22 @@ class SimulationResult(eqx.Module):
 
 
 def _wheelset_track_coordinates(vehicle, track, q, qdot):
-    """Lateral [m], vertical [m] offsets and yaw [rad] of each wheelset relative to the
-    track, and the lift [m] of each wheel (W, 2) above the track plane minus the
-    nominal radius."""
+    """Per wheelset: lateral [m], vertical [m] offsets and yaw [rad] relative to the
+    design track, the height [m] of each wheel's taping point (W, 2) over its rail's
+    place (the design track plane moved by the rail's vertical irregularity), and the
+    irregularity channels at the wheelset (W, 4) [m] (:mod:`jaxrail.track.rails`)."""
     position, rotation, _, _ = wheelset_states(vehicle, q, qdot)
+    sides = jnp.array([1.0, -1.0])
 
     def one(r, a):
         s, lateral, vertical = to_track_coordinates(track, r)
         frame = track_frame(track, s)
         axle = frame.T @ a[:, 1]
         yaw = -jnp.arctan2(axle[0], axle[1])
-        half = 0.75
-        wheel_heights = vertical + jnp.array([half, -half]) * axle[2]
-        return lateral, vertical, yaw, wheel_heights
+        irregularity = track_irregularity(track, s)
+        rail_heights = irregularity[1] + 0.5 * sides * irregularity[2]  # v + side c / 2
+        wheel_heights = vertical + sides * HALF_TAPING_DISTANCE * axle[2] - rail_heights
+        return lateral, vertical, yaw, wheel_heights, irregularity
     return jax.vmap(one)(position, rotation)
 
 
@@ -205,9 +215,10 @@ def _stop_events(vehicle, track, limits, rest_height):
     """The terminating diffrax Event of a run: (derailed, non-finite state)."""
     def derailed(t, y, args, **kwargs):
         q, qdot = y
-        lateral, _, _, heights = _wheelset_track_coordinates(vehicle, track, q, qdot)
+        lateral, _, _, heights, irregularity = _wheelset_track_coordinates(vehicle, track, q,
+                                                                           qdot)
         lifted = jnp.any(heights - rest_height > limits.lift)
-        off = jnp.any(jnp.abs(lateral) > limits.lateral)
+        off = jnp.any(jnp.abs(lateral - irregularity[:, 0]) > limits.lateral)
         return lifted | off
 
     def not_finite(t, y, args, **kwargs):
@@ -218,7 +229,7 @@ def _stop_events(vehicle, track, limits, rest_height):
 
 def _starts_derailed(limits, lateral0, misalignment):
     """Whether a run starts beyond the lateral limit: its initial wheelsets (lateral0
-    (W,) [m]) are, or the start is not finite and the misalignment asked for is beyond
+    (W,) [m], from the irregular track's centre) are, or the start is not finite and the misalignment asked for is beyond
     it (the static equilibrium of a wheel off its rail does not exist)."""
     unknown = ~jnp.all(jnp.isfinite(lateral0))
     return (jnp.any(jnp.abs(lateral0) > limits.lateral)
@@ -258,12 +269,12 @@ def _results(vehicle, params, track, model, q0, qdot0, ts, q, qdot, result, dera
              steps, accepted_steps, rejected_steps):
     """SimulationResult from the states at the output times (non-finite rows: not
     reached), without host timings."""
-    _, rest_vertical, _, _ = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
+    _, rest_vertical, _, _, _ = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
     valid = jnp.all(jnp.isfinite(q), axis=1) & jnp.all(jnp.isfinite(qdot), axis=1)
     # Outputs after an early stop are recomputed at the initial state and masked.
     q_safe = jnp.where(valid[:, None], q, q0)
     qdot_safe = jnp.where(valid[:, None], qdot, qdot0)
-    lateral, vertical, yaw, _ = jax.vmap(
+    lateral, vertical, yaw, _, irregularity = jax.vmap(
         lambda a, b: _wheelset_track_coordinates(vehicle, track, a, b))(q_safe, qdot_safe)
     wheels = jax.lax.map(lambda y: _wheel_outputs(vehicle, params, track, *y, model),
                          (q_safe, qdot_safe))
@@ -277,7 +288,7 @@ def _results(vehicle, params, track, model, q0, qdot0, ts, q, qdot, result, dera
     return SimulationResult(
         t=ts, q=q, qdot=qdot, valid=valid, wheelset_lateral=nan(lateral),
         wheelset_vertical=nan(vertical - rest_vertical), wheelset_yaw=nan(yaw),
-        wheels=wheels, constraint_violation=nan(violation), result=result,
+        irregularity=nan(irregularity), wheels=wheels, constraint_violation=nan(violation), result=result,
         derailed=jnp.asarray(derailed), steps=steps, accepted_steps=accepted_steps,
         rejected_steps=rejected_steps, wall_time_s=jnp.asarray(jnp.nan),
         compile_time_s=jnp.asarray(jnp.nan))
@@ -305,7 +316,9 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
     limits = DerailmentLimits() if limits is None else limits
     loads = VehicleLoads(vehicle, params, track, resolve_contact_model(contact_model))
     q0, qdot0 = _start(vehicle, params, track, speed, misalignment, s0, initial, loads.model)
-    lateral0, _, _, rest_heights = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
+    lateral0, _, _, rest_heights, irregularity0 = _wheelset_track_coordinates(vehicle, track,
+                                                                              q0, qdot0)
+    lateral0 = lateral0 - irregularity0[:, 0]  # from the irregular track's centre
     ts = jnp.linspace(0.0, t1, options.n_outputs)
     sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
                      options.controller()[1], options, limits, solver, adjoint)
@@ -385,8 +398,9 @@ def _run_in_segments(timer, vehicle, params, track, t1, q0, qdot0, options, limi
     q = np.full((options.n_outputs, q0.shape[0]), np.nan)
     qdot = np.full_like(q, np.nan)
     q[0], qdot[0] = q0, qdot0
-    lateral0, _, _, rest_heights = timer.run(_wheelset_track_coordinates, vehicle, track, q0,
-                                             qdot0)
+    lateral0, _, _, rest_heights, irregularity0 = timer.run(_wheelset_track_coordinates,
+                                                            vehicle, track, q0, qdot0)
+    lateral0 = lateral0 - irregularity0[:, 0]  # from the irregular track's centre
     started = _starts_derailed(limits, lateral0, misalignment)
     static = dict(options=options, limits=limits, solver=solver, contact_model=contact_model)
     result, derailed, counts = diffrax.RESULTS.successful, False, np.zeros(3, dtype=int)
@@ -420,6 +434,31 @@ def _run_in_segments(timer, vehicle, params, track, t1, q0, qdot0, options, limi
             *(jnp.asarray(c) for c in counts))
 
 
+def run_span(params: VehicleParams, speed, t1, s0=None) -> tuple[float, float]:
+    """Arc lengths [m] the wheelsets' positions cover in a run of ``t1`` [s] at ``speed``
+    [m/s] from ``s0`` (:func:`jaxrail.vehicles.initial_state`'s default: the rearmost
+    body 5 m after the start): ``(first, last)``, from the rearmost wheelset's start to
+    the leading one's end (host values)."""
+    x = np.asarray(params.layout)[:, 0]
+    s0 = 5.0 - float(np.min(x)) if s0 is None else float(s0)
+    return s0 + float(np.min(x)), s0 + float(np.max(x)) + float(speed) * float(t1)
+
+
+def warn_beyond_track(track, span) -> None:
+    """Warn when ``span`` (first, last) [m] of a run goes past the ends of the design
+    track, naming how far: the end segments continue by their own law there
+    (docs/track.md)."""
+    length = float(track.total_length)
+    first, last = span
+    if last > length:
+        warnings.warn(f"the run reaches s = {last:.1f} m, {last - length:.1f} m past the end of "
+                      f"the {length:g} m design track: its last segment continues by its own "
+                      "law (a straight stays straight, an arc the same circle)", stacklevel=3)
+    if first < 0.0:
+        warnings.warn(f"the run starts at s = {first:.1f} m, {-first:.1f} m before the design "
+                      "track: its first segment continues by its own law", stacklevel=3)
+
+
 def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: float,
              misalignment: float = 0.0, s0=None, options: SolverOptions = SolverOptions(),
              limits: DerailmentLimits | None = None, initial=None,
@@ -440,6 +479,8 @@ def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: f
     wall and compile times [s].
     """
     start = time.perf_counter()
+    if initial is None:
+        warn_beyond_track(track, run_span(params, speed, t1, s0))
     limits = DerailmentLimits() if limits is None else limits
     # the default model spelt out, so that None and OnlineContact() share one program
     contact_model = resolve_contact_model(contact_model)

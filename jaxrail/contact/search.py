@@ -20,12 +20,11 @@ import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
 from ..profiles._base import Profile, WheelProfile
-from ..track import project, rail_frame
+from ..track.rails import rail_displacement, rail_under_wheel, wheel_origin
 from .patches import (SECANT_SPAN, find_patches, overlap_density, refine_maximum, secant_curvature,
                       wide_point)
 from .strip import strip_point, wheel_frame
 
-HALF_TAPING_DISTANCE = 0.75  # [m] taping lines 1500 mm apart (back-to-back 1360 mm)
 PARTS = ("y_deepest", "centre", "breadth")  # of a patch's contact point (search_wheel_parts)
 
 
@@ -73,8 +72,9 @@ class ContactPatches(eqx.Module):
         dx: longitudinal offset of the contact point from the rail section [m] (eq. 13).
         y_rail: u_r, rail profile lateral coordinate [m] (eq. 15).
         s_rail: s_r, track arc length of the rail section [m] (eqs. 3-5).
-        y_track: lateral position of the contact point from the track centre [m],
-            positive to the left, in the (canted) track plane.
+        y_track: lateral position of the contact point from the design track centre
+            [m], positive to the left, in the (canted) track plane (with the rail's
+            irregularity).
         wheel_point, rail_point: the strip's wheel point and its foot on the rail [m].
         normal: unit contact normal, out of the rail into the wheel.
         frame: contact frame, columns [longitudinal t, lateral (normal x t), normal].
@@ -206,13 +206,12 @@ def _contact_data(surface, surface_index, wheel, rail, point, y, active, depth, 
 
 
 def _wheel_geometry(track, rail_offset, wheelset_position, wheelset_rotation, side, s_guess):
-    """Wheel origin, wheel frame and rail section of one wheel (eqs. 3-7)."""
-    axle = wheelset_rotation[:, 1]
-    wheel_origin = wheelset_position + side * HALF_TAPING_DISTANCE * axle
-    s_rail = project(track, wheel_origin, s_guess)
-    rail_origin, rail_axes = rail_frame(track, s_rail, side, rail_offset)
-    frame = wheel_frame(axle, rail_axes[:, 0])
-    return s_rail, (wheel_origin, frame, rail_origin, rail_axes, side)
+    """Wheel origin, wheel frame and rail section of one wheel (eqs. 3-7), the rail
+    from :mod:`jaxrail.track.rails`."""
+    origin = wheel_origin(wheelset_position, wheelset_rotation, side)
+    s_rail, rail_origin, rail_axes = rail_under_wheel(track, rail_offset, origin, side, s_guess)
+    frame = wheel_frame(wheelset_rotation[:, 1], rail_axes[:, 0])
+    return s_rail, (origin, frame, rail_origin, rail_axes, side)
 
 
 def search_wheel(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelset_position,
@@ -222,7 +221,8 @@ def search_wheel(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelse
 
     Arguments:
         wheel, rail: wheel and rail profiles (the same profiles serve both sides).
-        track: a :class:`jaxrail.track.Track`.
+        track: a :class:`jaxrail.track.Track` (with its irregularity, if any: the wheel
+            meets the rail where :mod:`jaxrail.track.rails` puts it).
         rail_offset: distance from the track centre to the rail profile origin [m]
             (:func:`jaxrail.profiles.rail_offset`).
         wheelset_position: wheelset centre, global, shape (3,) [m].
@@ -254,7 +254,8 @@ def search_wheel_parts(wheel: WheelProfile, rail: Profile, track, rail_offset, w
     located = {key: data.pop(key) for key in PARTS}
     data["surface"] = data["surface"].astype(jnp.int32)
     data["s_rail"] = jnp.full((slots,), s_rail)
-    data["y_track"] = side * (rail_offset + data["y_rail"])
+    data["y_track"] = side * (rail_offset + data["y_rail"]) + rail_displacement(track, s_rail,
+                                                                                side)[0]
     return ContactPatches(**data), located
 
 

@@ -44,9 +44,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..track import project, rail_frame, straight_track
+from ..track import rail_frame, straight_track
+from ..track.rails import HALF_TAPING_DISTANCE, rail_displacement, rail_under_wheel, wheel_origin
 from .patches import wide_point
-from .search import (HALF_TAPING_DISTANCE, ContactPatches, SearchConfig, contact_geometry,
+from .search import (ContactPatches, SearchConfig, contact_geometry,
                      deepest_depth, search_wheel_parts)
 from .strip import wheel_frame, wheel_surface_point
 
@@ -169,16 +170,15 @@ def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotati
     [m], origin (3,) and axes (3, 3), and the wheel's origin (3,) and
     :class:`~jaxrail.contact.strip.WheelFrame`."""
     axle = wheelset_rotation[:, 1]
-    wheel_origin = wheelset_position + side * HALF_TAPING_DISTANCE * axle
-    s_rail = project(track, wheel_origin)
-    rail_origin, rail_axes = rail_frame(track, s_rail, side, rail_offset)
+    origin = wheel_origin(wheelset_position, wheelset_rotation, side)
+    s_rail, rail_origin, rail_axes = rail_under_wheel(track, rail_offset, origin, side)
     frame = wheel_frame(axle, rail_axes[:, 0])
-    taping = wheel_origin - radius * frame.up - rail_origin
+    taping = origin - radius * frame.up - rail_origin
     local = rail_axes.T @ axle
     roll = jnp.arcsin(jnp.clip(local[2], -1.0, 1.0))
     yaw = jnp.arctan2(-local[0], local[1])
     return (taping @ rail_axes[:, 1], taping @ rail_axes[:, 2], yaw, roll, s_rail, rail_origin,
-            rail_axes, wheel_origin, frame)
+            rail_axes, origin, frame)
 
 
 def _pose_on_straight(track, rail_offset, radius, lateral, vertical, yaw, roll, side):
@@ -191,8 +191,8 @@ def _pose_on_straight(track, rail_offset, radius, lateral, vertical, yaw, roll, 
     rotation = rail_axes @ rotation_local
     axle = rotation[:, 1]
     up = wheel_frame(axle, rail_axes[:, 0]).up
-    wheel_origin = rail_origin + lateral * rail_axes[:, 1] + vertical * rail_axes[:, 2] + radius * up
-    return wheel_origin - side * HALF_TAPING_DISTANCE * axle, rotation
+    origin = rail_origin + lateral * rail_axes[:, 1] + vertical * rail_axes[:, 2] + radius * up
+    return origin - side * HALF_TAPING_DISTANCE * axle, rotation
 
 
 def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, levels):
@@ -642,7 +642,7 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
     ``(P,)``), each patch's penetration interpolated between the approach levels in the
     wheel's vertical position (:func:`_along_levels`)."""
     side = jnp.asarray(side, dtype=jnp.float64)
-    (lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, wheel_origin,
+    (lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, origin,
      frame) = relative_pose(track, rail_offset, table.radius, wheelset_position,
                             wheelset_rotation, side)
     side_index = jnp.where(side > 0.0, 0, 1).astype(jnp.int32)
@@ -667,8 +667,8 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
 
     def geometry_at(surface, yw, yr):
         # the wheel point as the search places it on the wheel in its actual pose
-        point, s_wheel = wheel_surface_point(surface, wheel.nominal_radius, yw, wheel_origin,
-                                             frame, side)
+        point, s_wheel = wheel_surface_point(surface, wheel.nominal_radius, yw, origin, frame,
+                                             side)
         dx = (point - rail_origin) @ rail_axes[:, 0]
         return dict(wheel_point=point, s_wheel=s_wheel, dx=dx,
                     **contact_geometry(surface, rail, wheel.nominal_radius, yw, yr, dx,
@@ -687,7 +687,7 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
         y_wheel=y_wheel,
         y_rail=y_rail,
         s_rail=jnp.full(y_wheel.shape, s_rail),
-        y_track=side * (rail_offset + y_rail),
+        y_track=side * (rail_offset + y_rail) + rail_displacement(track, s_rail, side)[0],
         curvature_contact_y=curvature,
         **geometry,
     )

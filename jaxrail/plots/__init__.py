@@ -10,7 +10,8 @@ from .montecarlo import plot_distributions as plot_distributions
 from .montecarlo import plot_maps as plot_maps
 from .profiles import plot_wheel_on_rail as plot_wheel_on_rail
 from .simulation import plot_wheelsets as plot_wheelsets
+from .track import plot_irregularity_psd as plot_irregularity_psd
 
 __all__ = ["plot_contact_positions", "plot_derailment_ratio", "plot_distributions",
-           "plot_forces", "plot_geometry", "plot_identification", "plot_lateral_displacements",
-           "plot_maps", "plot_wheel_on_rail", "plot_wheelsets"]
+           "plot_forces", "plot_geometry", "plot_identification", "plot_irregularity_psd",
+           "plot_lateral_displacements", "plot_maps", "plot_wheel_on_rail", "plot_wheelsets"]

@@ -5,7 +5,7 @@ import matplotlib
 import numpy as np
 
 from ._figure import subplots
-from ..contact.search import HALF_TAPING_DISTANCE
+from ..track.rails import HALF_TAPING_DISTANCE
 from ..profiles import sample_profile
 from .profiles import rail_name, save_figure
 

@@ -4,7 +4,7 @@ import numpy as np
 
 from ._figure import subplots
 from .._files import write_atomically
-from ..contact.search import HALF_TAPING_DISTANCE
+from ..track.rails import HALF_TAPING_DISTANCE
 from ..profiles import sample_profile
 from ..profiles.measures import rail_offset
 

@@ -2,7 +2,9 @@
 duration and solver options, read from TOML files; built-in ones by name.
 
 Built-in: ``paper-curve`` (the paper's example with real S1002 / UIC60 1:40 profiles),
-``paper-curve-simplified`` (the paper's simplified S1002), ``straight``, and
+``paper-curve-simplified`` (the paper's simplified S1002), ``straight``,
+``straight-irregular`` (the trailer on straight track with German low-level
+irregularities), and
 ``bogie-curve-entry`` (a loaded bogie running into a 300 m curve onto the flange root
 in 1 s, fixed steps: the identification scenario). The file
 format is described in docs/scenarios.md.
@@ -18,14 +20,16 @@ import equinox as eqx
 
 from ..profiles.named import named_profile
 from . import checks
-from ..simulation import INTEGRATORS, SolverOptions, simulate
+from .irregularities import IrregularitySpec, parse_irregularities
+from ..simulation import INTEGRATORS, SolverOptions, run_span, simulate
 from ..track import Arc, Straight, Track, Transition
 from ..vehicles import CONTACT_MODELS, bogie, contact_model, single_wheelset, trailer
 from ..vehicles.trailer import trailer_values
 
 __all__ = ["BUILTIN", "Scenario", "load_scenario", "parse_scenario", "run_scenario"]
 
-BUILTIN = ("paper-curve", "paper-curve-simplified", "straight", "bogie-curve-entry")
+BUILTIN = ("paper-curve", "paper-curve-simplified", "straight", "straight-irregular",
+           "bogie-curve-entry")
 _SEGMENTS = {"straight": (Straight, {"length"}),
              "transition": (Transition, {"length"}),
              "arc": (Arc, {"length", "radius", "direction", "cant"})}
@@ -55,6 +59,7 @@ class Scenario:
     fixed_step: float | None = None
     contact: str = "online"
     integrator: str = "tsit5"
+    irregularities: IrregularitySpec | None = None
 
     def solver_options(self, duration=None, progress=False) -> SolverOptions:
         """SolverOptions with ``output_rate`` samples per second over the duration."""
@@ -75,12 +80,37 @@ class Scenario:
                              progress)
 
     def track(self) -> Track:
-        """The track of ``[track] segments``; ValueError names the file and the segment."""
+        """The track of ``[track] segments`` with the ``[irregularities]``; ValueError
+        names the file and the segment or the irregularity's entry."""
         try:
-            return Track.from_segments([_SEGMENTS[s["kind"]][0](
+            track = Track.from_segments([_SEGMENTS[s["kind"]][0](
                 **{k: v for k, v in s.items() if k != "kind"}) for s in self.segments])
         except ValueError as error:
             raise ValueError(f"{self.source}: [track] segments: {error}") from error
+        if self.irregularities is None:
+            return track
+        try:
+            irregularity = self.irregularities.build(float(track.total_length))
+        except ValueError as error:
+            raise ValueError(f"{self.source}: [irregularities]: {error}") from error
+        return track.with_irregularity(irregularity)
+
+    def check_irregularity_covers(self, track, params, duration) -> None:
+        """ValueError when the run's wheelsets (:func:`jaxrail.simulation.run_span`) go
+        beyond the samples of a measured file's or a spectrum's irregularity (a defect is
+        zero outside its dip)."""
+        spec = self.irregularities
+        if spec is None or spec.covers_outside:
+            return
+        first, last = run_span(params, self.speed, duration)
+        irregularity = track.irregularity
+        start, end = float(irregularity.start), float(irregularity.end)
+        if first < start - 1e-9 or last > end + 1e-9:
+            what = f"file {spec.file!r}" if spec.source == "file" else "realisation"
+            raise ValueError(
+                f"{self.source}: [irregularities]: the {what} covers s = {start:g} to {end:g} m "
+                f"but the run's wheelsets go from {first:.1f} to {last:.1f} m ({duration:g} s at "
+                f"{self.speed:g} m/s); give a longer file or a shorter run")
 
     def _profile(self, key):
         """The ``[vehicle] key`` profile (key "wheel" or "rail"); ValueError names the
@@ -110,7 +140,8 @@ _TABLES = {"vehicle": {"model", "wheel", "rail", "inclination", "data"},
            "contact": {"friction", "mode"},
            "track": {"segments"},
            "run": {"speed", "misalignment", "duration"},
-           "solver": {"rtol", "atol", "output_rate", "fixed_step", "integrator"}}
+           "solver": {"rtol", "atol", "output_rate", "fixed_step", "integrator"},
+           "irregularities": None}
 
 
 def _segments(raw, where):
@@ -173,7 +204,7 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
         if name not in raw:
             raise ValueError(f"{where}: missing table [{name}]")
     tables = {name: checks.known_keys(raw.get(name, {}), keys, where, f"[{name}]")
-              for name, keys in _TABLES.items()}
+              for name, keys in _TABLES.items() if keys is not None}
     vehicle, run, solver = tables["vehicle"], tables["run"], tables["solver"]
     contact, number = tables["contact"], checks.number
     fixed_step = solver.get("fixed_step")
@@ -200,6 +231,7 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
                                                           "[solver] fixed_step"),
         contact=checks.text(contact, "mode", where, "[contact]", "online", CONTACT_MODELS),
         integrator=checks.text(solver, "integrator", where, "[solver]", "tsit5", INTEGRATORS),
+        irregularities=parse_irregularities(raw.get("irregularities"), where),
     )
     checks.run_size(scenario.duration, scenario.output_rate, scenario.fixed_step, where)
     return scenario
@@ -215,15 +247,22 @@ def load_scenario(name_or_path) -> Scenario:
     if not path.exists():
         raise ValueError(f"unknown scenario {str(name_or_path)!r}: use one of "
                          f"{', '.join(BUILTIN)} or a .toml file")
-    return parse_scenario(path.read_text(), str(path))
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a text (UTF-8) scenario file") from None
+    except OSError as error:
+        raise ValueError(f"{path}: cannot read the scenario file ({error.strerror})") from None
+    return parse_scenario(text, str(path))
 
 
 def run_scenario(scenario: Scenario, duration=None, progress=False, contact=None):
     """Build and simulate a scenario: ``(result, vehicle, params, track)``. ``contact``:
     ``"online"`` or ``"table"``, overriding the scenario's ``[contact] mode``."""
     vehicle, params, track = scenario.build()
-    model = scenario.contact_model(vehicle, params, contact, progress)
     duration = scenario.duration if duration is None else float(duration)
+    scenario.check_irregularity_covers(track, params, duration)
+    model = scenario.contact_model(vehicle, params, contact, progress)
     result = simulate(vehicle, params, track, duration, scenario.speed, scenario.misalignment,
                       options=scenario.solver_options(duration, progress), contact_model=model)
     return result, vehicle, params, track

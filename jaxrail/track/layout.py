@@ -25,6 +25,7 @@ differentiable with respect to lengths, radii and cants. Checks that need values
 traced ones; structural checks always run.
 """
 
+import dataclasses
 import functools
 from collections.abc import Sequence
 
@@ -36,6 +37,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._float64 import require_float64
 from .geometry import local_heading, local_offset
+from .irregularity import Irregularity
 
 
 class Straight(eqx.Module):
@@ -84,6 +86,8 @@ class Track(eqx.Module):
         sample_s, sample_xy: coarse centreline samples for the projection's initial
             guess, ``(m,)`` [m] and ``(m, 2)`` [m]; ``m`` is static.
         kinds: segment kinds ('straight', 'arc', 'transition'), static.
+        irregularity: the track's :class:`~jaxrail.track.irregularity.Irregularity`, or
+            None for the ideal track (:meth:`with_irregularity`).
     """
 
     segment_start: Float[Array, " n"]
@@ -99,6 +103,14 @@ class Track(eqx.Module):
     sample_s: Float[Array, " m"]
     sample_xy: Float[Array, "m 2"]
     kinds: tuple[str, ...] = eqx.field(static=True)
+    irregularity: Irregularity | None = None
+
+    def with_irregularity(self, irregularity: Irregularity | None) -> "Track":
+        """This layout with ``irregularity`` (None: the ideal track)."""
+        if irregularity is not None and not isinstance(irregularity, Irregularity):
+            raise TypeError(f"irregularity must be an Irregularity or None, got "
+                            f"{type(irregularity).__name__}")
+        return dataclasses.replace(self, irregularity=irregularity)
 
     @property
     def n_segments(self) -> int:

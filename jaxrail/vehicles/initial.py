@@ -6,7 +6,10 @@ equilibrium where the layout puts them. Each wheelset is lowered into the rails 
 rolled until each of its wheels carries half of the wheelset's share of the vehicle's
 weight (the vehicle is assumed symmetric: weight / number of wheelsets). Axlebox
 bodies take their wheelset's height and roll; the other bodies follow the wheelsets'
-mean height. A lateral misalignment shifts the whole vehicle sideways.
+mean height. A lateral misalignment shifts the whole vehicle sideways. On an irregular
+track every body also follows the track's alignment at its own arc length (the
+wheelsets find their height, roll and loads on the displaced rails through the contact
+model, :mod:`jaxrail.track.rails`).
 """
 
 import jax
@@ -17,7 +20,7 @@ from ..contact.pose import wheelset_pose
 from ..multibody import consistent_initial_conditions, join_coordinates
 from ..multibody import quaternion as qt
 from ..multibody import velocities_from_twists
-from ..track import track_frame
+from ..track import track_frame, track_irregularity
 from .vehicle import Vehicle, VehicleParams
 from .loads import wheelset_loads
 
@@ -125,8 +128,10 @@ def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalig
     wheelsets = np.asarray(vehicle.wheelsets)
     mass = params.system.bodies.mass
     load = -jnp.sum(mass) * params.system.gravity[2] / len(wheelsets)
+    alignment = lambda s: track_irregularity(track, s)[0]  # noqa: E731
     heights, rolls, radii = jax.vmap(lambda s: wheelset_rest_pose(
-        vehicle, params, track, s, misalignment, load, speed, model))(s0 + layout[wheelsets, 0])
+        vehicle, params, track, s, misalignment + alignment(s), load, speed, model))(
+        s0 + layout[wheelsets, 0])
     lift = jnp.mean(heights) - params.nominal_radius
 
     # per body: its own wheelset (wheelsets and axleboxes), or -1
@@ -139,7 +144,8 @@ def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalig
 
     def place(x, y, vertical, roll):
         s = s0 + x
-        position, rotation = wheelset_pose(track, s, y + misalignment, vertical, roll)
+        position, rotation = wheelset_pose(track, s, y + misalignment + alignment(s), vertical,
+                                           roll)
         return position, qt.from_rotation_matrix(rotation), speed * track_frame(track, s)[:, 0]
 
     position, p, velocity = jax.vmap(place)(layout[:, 0], layout[:, 1], height, roll)

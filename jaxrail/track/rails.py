@@ -1,0 +1,122 @@
+"""The rail under a wheel: the one place that defines where each rail is.
+
+A rail's profile origin and frame at arc length ``s`` are made of
+
+1. the design track's frame ``[t n b]`` at ``s`` (:func:`jaxrail.track.track_frame`);
+2. the rail's lateral offset from the track centre along ``n``, ``side * rail_offset``
+   (``rail_offset`` from the rail profile and the gauge,
+   :func:`jaxrail.profiles.rail_offset`);
+3. the track's irregularity, when it has one (:attr:`Track.irregularity`,
+   :mod:`jaxrail.track.irregularity`): the rail moved by ``y = a + side g / 2`` along
+   ``n`` and ``z = v + side c / 2`` along ``b``.
+
+The contact search, the contact tables, the loads, the initial equilibrium and the
+outputs all find a wheel's rail through :func:`rail_under_wheel` and
+:func:`rail_frame`. A wheel's origin on its axle is the taping point's plane,
+:data:`HALF_TAPING_DISTANCE` from the wheelset centre (:func:`wheel_origin`).
+"""
+
+import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike, Float
+
+from .geometry import _side_sign, centreline_position, track_frame
+from .projection import project
+
+HALF_TAPING_DISTANCE = 0.75  # [m] taping lines 1500 mm apart (back-to-back 1360 mm)
+
+
+def wheel_origin(wheelset_position, wheelset_rotation, side) -> Float[Array, "3"]:
+    """Origin [m] of the ``side`` wheel's profile (+1 left, -1 right): the wheelset
+    centre (3,) moved :data:`HALF_TAPING_DISTANCE` along the axle (the second column
+    of ``wheelset_rotation`` (3, 3)), global."""
+    return wheelset_position + side * HALF_TAPING_DISTANCE * wheelset_rotation[:, 1]
+
+
+def rail_displacement(track, s, side) -> tuple[Float[Array, ""], Float[Array, ""]]:
+    """``(lateral, vertical)`` [m] of the ``side`` rail from its design place at ``s``
+    [m], along the canted track frame's ``n`` and ``b``: the irregularity's, or zeros
+    on an ideal track."""
+    if getattr(track, "irregularity", None) is None:
+        zero = jnp.zeros((), dtype=jnp.float64)
+        return zero, zero
+    return track.irregularity.rail_displacement(s, side)
+
+
+def rail_frame(
+    track, s: Float[ArrayLike, ""], side, lateral_offset: Float[ArrayLike, ""]
+) -> tuple[Float[Array, "3"], Float[Array, "3 3"]]:
+    """Rail profile origin and orientation at ``s`` (paper eq. 1).
+
+    **Arguments:**
+        track: the track (design layout and, optionally, its irregularity).
+        s: arc length along the centreline [m].
+        side: ``+1`` or ``"left"`` for the left rail, ``-1`` or ``"right"`` for the right
+            (a traced array of +-1 is accepted for vmapping over both rails).
+        lateral_offset: distance [m] from the track centre to the rail profile origin,
+            measured along the canted ``n`` (e.g. about 0.75303 m for UIC60 1:40 at
+            gauge 1435 mm).
+
+    **Returns:** ``(origin, A)``: ``origin = centreline + (side * lateral_offset + y) n
+    + z b`` [m], global frame, shape ``(3,)``, with ``(y, z)`` the irregularity's
+    displacement of this rail (:func:`rail_displacement`); ``A = [t n b]`` ``(3, 3)``,
+    the design track frame, the same for both rails (the right rail's field-side
+    mirroring is applied to profile coordinates by :func:`jaxrail.track.rail_point` and
+    by the contact search via ``side``).
+    """
+    sign = _side_sign(side)
+    frame = track_frame(track, s)
+    offset = jnp.asarray(lateral_offset, dtype=jnp.float64)
+    lateral, vertical = rail_displacement(track, s, sign)
+    origin = (centreline_position(track, s) + (sign * offset + lateral) * frame[:, 1]
+              + vertical * frame[:, 2])
+    return origin, frame
+
+
+def rail_point(
+    track: "Track",
+    s: Float[ArrayLike, ""],
+    side,
+    lateral_offset: Float[ArrayLike, ""],
+    u: Float[ArrayLike, ""],
+    f: Float[ArrayLike, ""],
+    dx: Float[ArrayLike, ""] = 0.0,
+) -> Float[Array, "3"]:
+    """A point of a rail surface, global frame [m] (paper eq. 2).
+
+    ``origin + A @ (dx, side * u, f)`` with ``(origin, A) = rail_frame(...)``.
+
+    **Arguments:** as :func:`rail_frame`, plus
+        u: lateral profile coordinate [m], positive toward the **field side** (away
+            from the track centre); mirrored onto the track's ``n`` by ``side``, so the
+            same profile serves both rails.
+        f: profile height [m] along the canted ``b``.
+        dx: longitudinal offset [m] along ``t`` (the rail is locally straight).
+    """
+    sign = _side_sign(side)
+    origin, frame = rail_frame(track, s, sign, lateral_offset)
+    local = jnp.stack(
+        [
+            jnp.asarray(dx, dtype=jnp.float64),
+            sign * jnp.asarray(u, dtype=jnp.float64),
+            jnp.asarray(f, dtype=jnp.float64),
+        ]
+    )
+    return origin + frame @ local
+
+
+def rail_under_wheel(track, rail_offset, origin, side, s_guess=None):
+    """The rail section under a wheel whose profile origin is ``origin`` (3,) [m]
+    (:func:`wheel_origin`): ``(s_rail, rail_origin (3,), rail_axes (3, 3))``, the
+    section's arc length [m] (eqs. 3-5: the design centreline's normal plane through
+    the wheel origin) and the rail's frame there (:func:`rail_frame`)."""
+    s_rail = project(track, origin, s_guess)
+    rail_origin, rail_axes = rail_frame(track, s_rail, side, rail_offset)
+    return s_rail, rail_origin, rail_axes
+
+
+def track_irregularity(track, s) -> Float[Array, "4"]:
+    """The four irregularity channels [m] at ``s`` [m] (:data:`.irregularity.CHANNELS`),
+    zeros on an ideal track."""
+    if getattr(track, "irregularity", None) is None:
+        return jnp.zeros(4, dtype=jnp.float64)
+    return track.irregularity.at(s)
