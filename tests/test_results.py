@@ -97,7 +97,7 @@ def synthetic_result():
     return SimulationResult(
         t=t, q=q, qdot=qdot, valid=valid, wheelset_lateral=floats(lateral),
         wheelset_vertical=floats(np.full((T, W), 1e-5)), wheelset_yaw=floats(np.full((T, W), 2e-4)),
-        wheels=wheels, constraint_violation=floats(np.full(T, 1e-9)),
+        irregularity=floats(np.full((T, W, 4), 1e-3)), wheels=wheels, constraint_violation=floats(np.full(T, 1e-9)),
         result=diffrax.RESULTS.successful, derailed=np.asarray(True), steps=np.asarray(100),
         accepted_steps=np.asarray(90), rejected_steps=np.asarray(10),
         wall_time_s=np.asarray(2.0), compile_time_s=np.asarray(np.nan))

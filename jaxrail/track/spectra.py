@@ -38,6 +38,14 @@ DEFAULT_BAND = (3.0, 150.0)  # [m] wavelengths: EN 13848's D1-D3 (3-25, 25-70, 7
 MAX_SAMPLES = 4_000_000  # samples of one realisation (128 MB of float64 channels)
 
 
+def _stack(channels):
+    """The channels stacked as NumPy for NumPy input (host: realisations are built from
+    NumPy amplitudes, also inside jit), as JAX otherwise."""
+    if any(isinstance(x, jax.Array) for x in channels):
+        return jnp.stack(channels)
+    return np.stack(channels)
+
+
 @dataclasses.dataclass(frozen=True)
 class GermanSpectrum:
     """ORE B176 "German" spectrum: ``level`` coefficients ``a_v``, ``a_a``, ``a_g`` [m rad]
@@ -58,7 +66,7 @@ class GermanSpectrum:
         high = w2 / (w2 + self.ws ** 2)
         # the angle spectrum (A_v / b^2) ... times (2 b)^2, the rails' height difference
         cross = (2.0 * HALF_RAIL_DISTANCE) ** 2 / HALF_RAIL_DISTANCE ** 2 * self.a_v * base * high
-        return jnp.stack([self.a_a * base, self.a_v * base, cross, self.a_g * base * high])
+        return _stack([self.a_a * base, self.a_v * base, cross, self.a_g * base * high])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,8 +83,8 @@ class FraSpectrum:
         """One-sided PSDs (4, ...) [m^2/(rad/m)] of :data:`CHANNELS` at ``w`` [rad/m]."""
         w2 = w * w
         base = 1e-4 * self.k * self.wc ** 2 / (w2 * (w2 + self.wc ** 2))  # cm^2 -> m^2
-        zero = jnp.zeros_like(base)
-        return jnp.stack([self.a_a * base, self.a_v * base, zero, zero])
+        zero = 0.0 * base
+        return _stack([self.a_a * base, self.a_v * base, zero, zero])
 
 
 _FRA = ((1.2107, 3.3634), (1.0181, 1.2107), (0.6816, 0.4128), (0.5376, 0.3027),
@@ -122,7 +130,7 @@ def band_variance(spectrum_, band) -> np.ndarray:
     a, b = math.log(2 * math.pi / hi), math.log(2 * math.pi / lo)
     log_w = 0.5 * (b - a) * x + 0.5 * (b + a)
     freq = np.exp(log_w)
-    values = np.asarray(spectrum_.psd(jnp.asarray(freq)))
+    values = spectrum_.psd(freq)
     return 0.5 * (b - a) * np.sum(w * freq * values, axis=-1)
 
 
@@ -166,7 +174,7 @@ def component_amplitudes(spectrum_, size: int, step: float, band) -> np.ndarray:
     w = dw * np.arange(size // 2 + 1)
     inside = (w >= 2.0 * math.pi / band[1]) & (w <= 2.0 * math.pi / band[0])
     inside[0] = inside[-1] = False
-    psd = np.asarray(spectrum_.psd(jnp.asarray(np.where(inside, w, 1.0))))
+    psd = spectrum_.psd(np.where(inside, w, 1.0))
     return np.where(inside, np.sqrt(2.0 * psd * dw), 0.0)
 
 
