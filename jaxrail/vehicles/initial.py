@@ -12,6 +12,8 @@ wheelsets find their height, roll and loads on the displaced rails through the c
 model, :mod:`jaxrail.track.rails`).
 """
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -27,7 +29,7 @@ from .loads import wheelset_loads
 HEIGHT_BISECTIONS = 50  # from [r0/2, 3 r0/2]: 4e-16 m
 ROLL_BISECTIONS = 40  # from [-MAX_ROLL, MAX_ROLL]: 4e-14 rad
 MAX_ROLL = 0.02  # [rad]
-STEP = 1e-7  # finite-difference step in height [m] and roll [rad]
+STEP = 1e-8  # central-difference step in height [m] and roll [rad] of the Newton step
 
 
 def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed, model):
@@ -57,34 +59,42 @@ def wheelset_rest_pose(vehicle: Vehicle, params: VehicleParams, track, s, latera
     of the overlap, weighted by normal force). ``model``: the contact model
     (:mod:`jaxrail.vehicles.loads`, default the paper's search).
 
-    Nested bisections without gradient: on the roll (within 20 mrad) for equal wheel
-    loads, each with a bisection on the height for the total load. Then one Newton
-    step on (height, roll) with a finite-difference Jacobian, which carries the
-    derivative with respect to the parameters (implicit function theorem) and compiles
-    no derivative of the contact search.
+    Nested bisections: on the roll (within 20 mrad) for equal wheel loads, each with a
+    bisection on the height for the total load; then one Newton step on (height, roll)
+    with a central-difference Jacobian. The derivatives with respect to every input
+    (the parameters, the track with its irregularity, the place, the shift, the speed,
+    the load) are the implicit function theorem's, with the exact Jacobian of the wheel
+    loads (forward mode through the contact model, compiled only when differentiated).
     """
-    frozen = jax.lax.stop_gradient((params, s, lateral, speed, load))
+    f64 = lambda x: jnp.asarray(x, dtype=jnp.float64)  # noqa: E731
+    return _rest_pose(vehicle, (params, track, f64(s), f64(lateral), f64(speed), f64(load),
+                                model))
 
-    def loads(p, h, roll):
-        return _wheel_loads(vehicle, p, track, frozen[1], frozen[2], h, roll, frozen[3], model)
 
-    def residual_and_jacobian(p, pose):
-        probes = pose + jnp.array([[0.0, 0.0], [STEP, 0.0], [0.0, STEP]])
-        f, radius = jax.vmap(lambda x: loads(p, x[0], x[1]))(probes)
-        residual = f - 0.5 * load
-        jacobian = jax.lax.stop_gradient(jnp.stack([f[1] - f[0], f[2] - f[0]], axis=1) / STEP)
-        d_radius = jax.lax.stop_gradient(jnp.stack([radius[1] - radius[0],
-                                                    radius[2] - radius[0]]) / STEP)
-        return residual[0], jacobian, radius[0], d_radius
+def _residual(vehicle, inputs, pose):
+    """Each wheel's load less half the wheelset's (2,) [N] and the rolling radius [m]
+    with the wheelset at ``pose`` (height [m], roll [rad])."""
+    params, track, s, lateral, speed, load, model = inputs
+    forces, radius = _wheel_loads(vehicle, params, track, s, lateral, pose[0], pose[1], speed,
+                                  model)
+    return forces - 0.5 * load, radius
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
+def _rest_pose(vehicle, inputs):
+    """(height, roll, radius) of :func:`wheelset_rest_pose` for ``inputs`` = (params,
+    track, s, lateral, speed, load, model)."""
+    load = inputs[5]
+    loads = lambda h, roll: _residual(vehicle, inputs, jnp.stack([h, roll]))[0] + 0.5 * load  # noqa: E731
 
     def height_for(roll):
         """Bisection on the height at this roll for the total load."""
         def bisect(_, bounds):
             lo, hi = bounds
             mid = 0.5 * (lo + hi)
-            heavy = jnp.sum(loads(frozen[0], mid, roll)[0]) > frozen[4]  # too deep: raise
+            heavy = jnp.sum(loads(mid, roll)) > load  # too deep: raise
             return jnp.where(heavy, mid, lo), jnp.where(heavy, hi, mid)
-        r0 = jax.lax.stop_gradient(frozen[0].nominal_radius)
+        r0 = inputs[0].nominal_radius
         lo, hi = jax.lax.fori_loop(0, HEIGHT_BISECTIONS, bisect, (0.5 * r0, 1.5 * r0))
         return 0.5 * (lo + hi)
 
@@ -92,7 +102,7 @@ def wheelset_rest_pose(vehicle: Vehicle, params: VehicleParams, track, s, latera
         lo, hi, _, _ = state
         mid = 0.5 * (lo + hi)
         height = height_for(mid)
-        left, right = loads(frozen[0], height, mid)[0]
+        left, right = loads(height, mid)
         more_left = left > right  # positive roll lifts the left wheel
         return jnp.where(more_left, mid, lo), jnp.where(more_left, hi, mid), height, mid
 
@@ -100,10 +110,26 @@ def wheelset_rest_pose(vehicle: Vehicle, params: VehicleParams, track, s, latera
     *_, height, roll = jax.lax.fori_loop(0, ROLL_BISECTIONS, bisect_roll,
                                          (zero - MAX_ROLL, zero + MAX_ROLL, zero, zero))
     pose = jnp.stack([height, roll])
-    pose = jax.lax.stop_gradient(pose)
-    residual, jacobian, radius, d_radius = residual_and_jacobian(params, pose)
-    step = -jnp.linalg.solve(jacobian, residual)
-    return pose[0] + step[0], pose[1] + step[1], radius + d_radius @ step
+    probes = pose + STEP * jnp.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0],
+                                      [0.0, -1.0]])
+    residual, radius = jax.vmap(lambda x: _residual(vehicle, inputs, x))(probes)
+    central = lambda x: jnp.stack([x[1] - x[3], x[2] - x[4]], axis=-1) / (2.0 * STEP)  # noqa: E731
+    step = -jnp.linalg.solve(central(residual), residual[0])
+    return pose[0] + step[0], pose[1] + step[1], radius[0] + central(radius) @ step
+
+
+@_rest_pose.defjvp
+def _rest_pose_jvp(vehicle, primals, tangents):
+    """The implicit function theorem at the rest pose: d pose = -J^-1 (d residual / d
+    inputs), J the exact Jacobian of the residual in the pose (forward mode)."""
+    (inputs,), (d_inputs,) = primals, tangents
+    height, roll, radius = _rest_pose(vehicle, inputs)
+    pose = jnp.stack([height, roll])
+    _, (d_residual, d_radius) = jax.jvp(lambda x: _residual(vehicle, x, pose), (inputs,),
+                                        (d_inputs,))
+    by_pose, radius_by_pose = jax.jacfwd(lambda p: _residual(vehicle, inputs, p))(pose)
+    d_pose = -jnp.linalg.solve(by_pose, d_residual)
+    return (height, roll, radius), (d_pose[0], d_pose[1], d_radius + radius_by_pose @ d_pose)
 
 
 def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalignment=0.0,
