@@ -2,8 +2,10 @@
 for 41 s, with the simplified and the real S1002 profiles (built-in scenarios
 ``paper-curve-simplified`` and ``paper-curve``).
 
-Prints JSON per profile kind, contact model (``--contacts online table``) and
-integrator (``--integrators tsit5 imex``), all in one process: compile time, wall
+Prints JSON per profile kind, track (``--tracks smooth german-low``: the design track,
+or the same with a realisation of that irregularity spectrum, seed 7, 3-150 m), contact
+model (``--contacts online table``) and integrator (``--integrators tsit5 imex``), all
+in one process, and each irregular run's wall time over its smooth twin's: compile time, wall
 time, simulated time, real-time factor, steps accepted and rejected, right-hand-side
 evaluations (Tsit5: 6 per attempted step; IMEX: 8 and one Jacobian of the wheel-rail
 loads), status; for every run after the first of a profile and contact model, its
@@ -17,8 +19,8 @@ from a run of 1 ms with the same options). With ``--save DIR`` it also keeps eac
 SimulationResult as numpy arrays, for experiments/paper_curve/figures.py), its results
 file (``.h5``) and summary (``.json``).
 Usage: ``python benchmarks/paper_curve.py [--duration 41] [--save DIR]
-[--scenarios paper-curve-simplified paper-curve] [--contacts online]
-[--integrators tsit5 imex]``.
+[--scenarios paper-curve-simplified paper-curve] [--tracks smooth german-low]
+[--contacts online] [--integrators tsit5 imex]``.
 """
 
 import argparse
@@ -42,6 +44,7 @@ enable_float64()
 from jaxrail._files import write_atomically  # noqa: E402
 from jaxrail.results import summarize  # noqa: E402
 from jaxrail.scenarios import load_scenario, run_scenario  # noqa: E402
+from jaxrail.scenarios.irregularities import IrregularitySpec  # noqa: E402
 from jaxrail.simulation import simulate  # noqa: E402
 
 STAGES = {"tsit5": 6, "imex": 8}
@@ -56,12 +59,14 @@ def main():
     parser.add_argument("--save", type=Path, default=None, help="keep the runs in DIR")
     parser.add_argument("--scenarios", nargs="+",
                         default=["paper-curve-simplified", "paper-curve"])
+    parser.add_argument("--tracks", nargs="+", default=["smooth", "german-low"],
+                        help="smooth, or an irregularity spectrum (seed 7, 3-150 m)")
     parser.add_argument("--contacts", nargs="+", default=["online"],
                         choices=("online", "table"))
     parser.add_argument("--integrators", nargs="+", default=["tsit5", "imex"],
                         choices=("tsit5", "imex"))
     parser.add_argument("--progress", action="store_true")
-    parser.add_argument("--cached-child", nargs=3, help=argparse.SUPPRESS)
+    parser.add_argument("--cached-child", nargs=4, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.cached_child:
         print(json.dumps(_compile_only(*args.cached_child, args.duration)))
@@ -71,28 +76,51 @@ def main():
     jax.config.update("jax_compilation_cache_dir", cache)
     runs = []
     for name in args.scenarios:
-        for contact in args.contacts:
-            first = None
-            for integrator in args.integrators:
-                scenario = dataclasses.replace(load_scenario(name), integrator=integrator)
-                result, vehicle, params, _ = run_scenario(scenario, args.duration,
-                                                          args.progress, contact=contact)
-                runs.append(_report(name, scenario, contact, integrator, result, first))
-                runs[-1]["cached_compile_time_s"] = _cached_compile(name, contact, integrator,
-                                                                   args.duration)
-                print(json.dumps(runs[-1]), flush=True)
-                first = result if first is None else first
-                if args.save is not None:
-                    _save(args.save, f"{name}-{contact}-{integrator}", scenario, result,
-                          vehicle, params)
+        for track in args.tracks:
+            for contact in args.contacts:
+                first = None
+                for integrator in args.integrators:
+                    scenario = _scenario(name, track, integrator)
+                    result, vehicle, params, _ = run_scenario(scenario, args.duration,
+                                                              args.progress, contact=contact)
+                    runs.append(_report(name, scenario, contact, integrator, result, first))
+                    runs[-1]["track"] = track
+                    runs[-1]["cached_compile_time_s"] = _cached_compile(
+                        name, track, contact, integrator, args.duration)
+                    print(json.dumps(runs[-1]), flush=True)
+                    first = result if first is None else first
+                    if args.save is not None:
+                        _save(args.save, f"{name}-{track}-{contact}-{integrator}", scenario,
+                              result, vehicle, params)
     print(json.dumps({"benchmark": "paper_curve", "runs": runs,
+                      "irregular_over_smooth_wall_time": _irregular_over_smooth(runs),
                       "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
                                   "load": os.getloadavg()}}, indent=2))
 
 
-def _compile_only(name, contact, integrator, duration):
-    """compile_time_s of a 1 ms run with the options of a ``duration`` run."""
+def _scenario(name, track, integrator):
+    """The built-in scenario ``name`` with ``integrator`` on the design track ("smooth")
+    or on a realisation of the spectrum ``track`` (seed 7, 3-150 m)."""
     scenario = dataclasses.replace(load_scenario(name), integrator=integrator)
+    if track == "smooth":
+        return scenario
+    return dataclasses.replace(scenario, irregularities=IrregularitySpec(
+        "spectrum", spectrum=track, seed=7))
+
+
+def _irregular_over_smooth(runs):
+    """{scenario/track/contact/integrator: wall time over the smooth run's}."""
+    smooth = {(r["scenario"], r["contact"], r["integrator"]): r["wall_time_s"] for r in runs
+              if r["track"] == "smooth"}
+    return {f'{r["scenario"]}/{r["track"]}/{r["contact"]}/{r["integrator"]}': round(
+        r["wall_time_s"] / smooth[(r["scenario"], r["contact"], r["integrator"])], 3)
+        for r in runs if r["track"] != "smooth"
+        and (r["scenario"], r["contact"], r["integrator"]) in smooth}
+
+
+def _compile_only(name, track, contact, integrator, duration):
+    """compile_time_s of a 1 ms run with the options of a ``duration`` run."""
+    scenario = _scenario(name, track, integrator)
     vehicle, params, track = scenario.build()
     duration = scenario.duration if duration is None else duration
     result = simulate(vehicle, params, track, 1e-3, scenario.speed, scenario.misalignment,
@@ -101,9 +129,9 @@ def _compile_only(name, contact, integrator, duration):
     return {"compile_time_s": float(result.compile_time_s), "status": result.status}
 
 
-def _cached_compile(name, contact, integrator, duration):
+def _cached_compile(name, track, contact, integrator, duration):
     """Compile time [s] of the same programs in a new process (the cache filled)."""
-    command = [sys.executable, __file__, "--cached-child", name, contact, integrator]
+    command = [sys.executable, __file__, "--cached-child", name, track, contact, integrator]
     if duration is not None:
         command += ["--duration", str(duration)]
     out = subprocess.run(command, stdout=subprocess.PIPE, text=True, check=True)

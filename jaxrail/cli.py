@@ -299,9 +299,15 @@ def _montecarlo_command(args):
     print(f"jaxrail montecarlo {scenario.name}: {args.samples} samples of {duration:g} s "
           f"({args.design}, seed {args.seed}) on {len(devices)} device(s); compiling the "
           "batched simulation first ...", file=sys.stderr)
+    checkpoint = None
+    if args.out and jax.process_index() == 0:
+        checkpoint = Path(f"{args.out[0]}.chunks.json")
+        if checkpoint.exists() and not args.overwrite:
+            print(f"resuming from the finished chunks in {checkpoint}", file=sys.stderr)
     result = run_montecarlo(scenario, variations, args.samples, seed=args.seed,
                             design=args.design, duration=duration, chunk=args.chunk,
-                            progress=not args.quiet, contact=args.contact)
+                            progress=not args.quiet, contact=args.contact,
+                            checkpoint=checkpoint, overwrite=args.overwrite)
     table = result.table
     n = len(table["status"])
     print(f"{result.statuses} in {result.run_time_s:.1f} s (+ {result.compile_time_s:.1f} s "
@@ -312,6 +318,8 @@ def _montecarlo_command(args):
             Path(path).parent.mkdir(parents=True, exist_ok=True)
             write_table(path, table)
             print(f"wrote {path}", file=sys.stderr)
+        if checkpoint is not None:
+            checkpoint.unlink(missing_ok=True)  # the tables hold every row now
         if args.plots:
             from .plots.montecarlo import plot_distributions, plot_maps
 
@@ -476,6 +484,9 @@ def build_parser():
                                                    "scenario's)")
     mc.add_argument("--out", action="append", help="write the table to this .csv or "
                                                    ".parquet file (repeat for both)")
+    mc.add_argument("--overwrite", action="store_true",
+                    help="start afresh over a checkpoint of another study (OUT.chunks.json, "
+                         "the finished chunks kept while the study runs)")
     mc.add_argument("--summary", help="write the JSON statistics here (default: stdout)")
     mc.add_argument("--plots", help="write the maps and distributions (PNG) here")
     mc.add_argument("--host-devices", type=int, metavar="N",

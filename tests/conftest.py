@@ -8,5 +8,5 @@ os.environ.setdefault("XLA_FLAGS", "--xla_backend_optimization_level=0")
 
 import jax  # noqa: E402
 
-# Physics is float64 (DESIGN.md §8); tests run with it on, as the CLI does.
+# Physics is float64 (docs/design.md §8); tests run with it on, as the CLI does.
 jax.config.update("jax_enable_x64", True)

@@ -1,5 +1,5 @@
 """Without float64 the library refuses to build profiles and tracks and to compute creep
-forces (DESIGN.md §8)."""
+forces (docs/design.md §8)."""
 
 import os
 import subprocess

@@ -26,8 +26,9 @@ import jax.numpy as jnp  # noqa: E402
 
 from jaxrail.contact import SearchConfig  # noqa: E402
 from jaxrail.contact.pose import wheelset_pose  # noqa: E402
-from jaxrail.contact.table import (Axis, TableGrid, _node, _pose_on_straight,  # noqa: E402
-                                   build_contact_table, relative_pose, table_patches)
+from jaxrail.contact.table import (Axis, TableGrid, build_contact_table,  # noqa: E402
+                                   relative_pose, table_patches)
+from jaxrail.contact.table.build import _node, _pose_on_straight  # noqa: E402
 from jaxrail.geometry import wheelset_geometry  # noqa: E402
 from jaxrail.profiles import s1002, uic60  # noqa: E402
 from jaxrail.profiles.measures import rail_offset  # noqa: E402

@@ -48,12 +48,17 @@ def compare(online, table):
     intervals = [s["wheels"][OUTER]["multi_patch_intervals_s"] for s in summaries]
     difference = np.abs(lateral[0] - lateral[1])
     worst = int(np.argmax(np.where(valid, difference, -1.0)))
+    # the largest normal force on any wheel (the sum of its patches)
+    largest = [float(np.max(np.nansum(np.asarray(r.wheels.normal_force)[valid], axis=-1)))
+               for r in (online, table)]
     return {
         "max_leading_lateral_difference_mm": float(1e3 * difference[worst]),
         "max_leading_lateral_difference_at_s": float(np.asarray(online.t)[worst]),
         "outer_max_normal_force_N": [float(np.max(f[valid])) for f in force],
         "outer_max_normal_force_difference_percent": float(
             100 * (np.max(force[1][valid]) / np.max(force[0][valid]) - 1)),
+        "max_normal_force_any_wheel_N": largest,
+        "max_normal_force_any_wheel_difference_percent": float(100 * (largest[1] / largest[0] - 1)),
         "max_Y_over_Q": [float(x) for x in ratio],
         "max_Y_over_Q_difference": float(ratio[1] - ratio[0]),
         "outer_multi_patch_intervals_s": intervals,

@@ -8,7 +8,7 @@ Contact frame (a 3x3 matrix whose **columns** are unit vectors in the global fra
 - ``n`` (column 2) = ``t x l``, normal: **out of the rail into the wheel** (upward for a
   tread contact). ``(t, l, n)`` is right-handed.
 
-Creepages follow Kalker (DESIGN.md section 3): with ``v_slip`` the velocity of the
+Creepages follow Kalker (docs/design.md §3): with ``v_slip`` the velocity of the
 wheel's material point at the contact minus the rail's,
 
     xi = v_slip . t / V,    eta = v_slip . l / V,    phi = (omega_w - omega_r) . n / V,

@@ -1,6 +1,6 @@
 """Contact patches from per-strip depths, and sub-strip refinement.
 
-A patch is a run of adjacent penetrating strips (DESIGN.md §4, step 3), or one of the
+A patch is a run of adjacent penetrating strips (docs/design.md §4, step 3), or one of the
 local depth maxima of a run that has several (conformal two-point contact, see
 :func:`find_patches`). Its depth is that of the strip of largest penetration, refined
 below the strip spacing by a parabola through the neighbouring strips and Newton steps

@@ -1,6 +1,6 @@
 """Polach's creep-force method (1999) with spin, and its 2005 extension.
 
-Sign convention (Kalker, DESIGN.md section 3): creepages are the slip of the wheel over
+Sign convention (Kalker, docs/design.md §3): creepages are the slip of the wheel over
 the rail divided by the rolling speed (see :mod:`jaxrail.contact.creepage`); the
 returned forces act **on the wheel**, in the contact frame's tangent plane
 (longitudinal ``t``, lateral ``l``), and oppose the creepage:

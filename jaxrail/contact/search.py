@@ -1,6 +1,6 @@
 """The paper's contact search for one wheel, one wheelset and a whole vehicle.
 
-Per wheel (DESIGN.md §4): the rail section nearest the wheel profile origin (eqs. 3-5),
+Per wheel (docs/design.md §4): the rail section nearest the wheel profile origin (eqs. 3-5),
 every strip of a fixed grid across each wheel surface against that locally straight
 rail (:mod:`jaxrail.contact.strip`, vmapped), runs of penetrating strips as patches,
 the deepest point of each patch refined below the strip spacing, and a wide patch

@@ -17,6 +17,7 @@ from .._ranges import within
 from ..scenarios import checks
 from ..vehicles.parameters import PARAMETERS, get_values
 from .batch import run_chunks
+from .checkpoint import Checkpoint, study_key
 from .sampling import DESIGNS, Variation, check_names, draw, parse_variation
 from .summary import sample_row
 from .table import read_table, write_table
@@ -54,6 +55,8 @@ class MonteCarlo:
 
 MAX_SAMPLES = 1_000_000
 """Most samples of one study (its table alone is then about 0.2 GB)."""
+MAX_SEED = 2 ** 31 - 1
+"""Largest irregularity seed."""
 
 
 def check_samples(samples: dict, where: str, key: str) -> None:
@@ -62,8 +65,10 @@ def check_samples(samples: dict, where: str, key: str) -> None:
     the parameter's (:mod:`jaxrail.vehicles.parameters`) for the others. The error
     names ``where`` (with ``{name}`` for the input) and ``key``."""
     for name, values in samples.items():
-        if name in ("speed", "misalignment"):
+        if name in ("speed", "misalignment", "irregularity_scale"):
             low, high, unit = checks.RANGES[name]
+        elif name == "irregularity_seed":
+            low, high, unit = 0.0, float(MAX_SEED), "-"
         elif name in PARAMETERS:
             (low, high), unit = PARAMETERS[name].range, PARAMETERS[name].unit
         else:
@@ -74,13 +79,42 @@ def check_samples(samples: dict, where: str, key: str) -> None:
             within(values[bad][0], low, high, unit, f"{where.format(name=name)}: {key}")
 
 
+def _irregularity_inputs(scenario, track, samples, n):
+    """``(seed (n,), scale (n,), realise)`` of the samples' irregularities: the drawn seeds
+    (rounded down) and scales, else the scenario's; ``realise`` the scenario's spectrum
+    over the design track when seeds are drawn (None otherwise)."""
+    spec = scenario.irregularities
+    drawn = [k for k in ("irregularity_seed", "irregularity_scale") if k in samples]
+    if drawn and spec is None:
+        raise ValueError(f"--vary {drawn[0]}: the scenario {scenario.name!r} has no "
+                         "[irregularities] to vary")
+    if "irregularity_seed" in samples and spec.source != "spectrum":
+        raise ValueError(f"--vary irregularity_seed: the scenario's irregularity is a "
+                         f"{spec.source}, not a spectrum with realisations")
+    default_seed = 0 if spec is None else spec.seed
+    default_scale = 1.0 if spec is None else spec.scale
+    seed = np.floor(np.broadcast_to(np.asarray(samples.get("irregularity_seed", default_seed),
+                                               np.float64), (n,)))
+    scale = np.broadcast_to(np.asarray(samples.get("irregularity_scale", default_scale),
+                                       np.float64), (n,))
+    realise = None
+    if "irregularity_seed" in samples:
+        length = spec.length if spec.length is not None else float(track.total_length)
+        realise = dataclasses.replace(spec, length=length)
+    return seed, scale, realise
+
+
 def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=None,
-                progress=False, keep_results=False, built=None, contact=None) -> MonteCarlo:
+                progress=False, keep_results=False, built=None, contact=None,
+                checkpoint=None, overwrite=False) -> MonteCarlo:
     """Run ``scenario`` once per sample: ``samples`` {input: array (N,)} with inputs
-    ``speed`` [m/s], ``misalignment`` [m] and parameter names (others keep the
-    scenario's values). ``duration`` [s] overrides the scenario's; ``devices``: the
-    devices to shard over (default all); ``built``: the scenario's ``build()`` output,
-    to reuse; ``contact``: ``"online"`` or ``"table"`` (default the scenario's mode)."""
+    ``speed`` [m/s], ``misalignment`` [m], ``irregularity_seed``, ``irregularity_scale``
+    and parameter names (others keep the scenario's values). ``duration`` [s] overrides
+    the scenario's; ``devices``: the devices to shard over (default all); ``built``: the
+    scenario's ``build()`` output, to reuse; ``contact``: ``"online"`` or ``"table"``
+    (default the scenario's mode). ``checkpoint``: a file (:mod:`.checkpoint`) that keeps
+    every finished chunk's rows, written whole after each chunk; a second call with the
+    same study resumes from it (another study is refused unless ``overwrite``)."""
     import jax
 
     check_names(samples, PARAMETERS)
@@ -98,25 +132,42 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
     speed = np.broadcast_to(np.asarray(samples.get("speed", scenario.speed), np.float64), (n,))
     shift = np.broadcast_to(np.asarray(samples.get("misalignment", scenario.misalignment),
                                        np.float64), (n,))
+    seed, scale, realise = _irregularity_inputs(scenario, track, samples, n)
     values = np.stack([np.asarray(samples[k], np.float64) for k in names], axis=1) if names \
         else np.zeros((n, 0))
     friction = (np.asarray(samples["friction"], np.float64) if "friction" in samples
                 else np.full(n, float(get_values(vehicle, params, ("friction",))[0])))
     devices = jax.devices() if devices is None else list(devices)
     rows, kept = [None] * n, []
+    saved = None
+    if checkpoint is not None:
+        study = study_key(scenario, samples, duration, contact, chunk)
+        saved = Checkpoint.open(checkpoint, study, n, overwrite)
+        for i, row in saved.rows.items():
+            rows[i] = row
+    if keep_results and saved is not None and saved.rows:
+        raise ValueError("keep_results needs every sample run in this call; a checkpoint "
+                         f"{checkpoint} holds finished samples")
 
     def collect(start, stop, result):
         for i in range(start, stop):
             one = jax.tree.map(lambda x: x[i - start], result)
             rows[i] = sample_row(one, friction[i], speed[i])
+        if saved is not None:
+            saved.add({i: rows[i] for i in range(start, stop)})
         if keep_results:
             kept.append(result)
 
+    done = None if saved is None else np.array([row is not None for row in rows])
     model = scenario.contact_model(vehicle, params, contact, progress)
-    compile_s, run_s, chunk = run_chunks((vehicle, params, track, model), (values, speed, shift),
-                                         chunk, devices, progress=progress, on_chunk=collect,
-                                         names=names, duration=duration, options=options)
+    compile_s, run_s, chunk = run_chunks((vehicle, params, track, model),
+                                         (values, speed, shift, seed, scale), chunk, devices,
+                                         progress=progress, on_chunk=collect, done=done,
+                                         names=names, duration=duration, options=options,
+                                         realise=realise)
     table = {"sample": np.arange(n), "speed": speed.copy(), "misalignment": shift.copy()}
+    if scenario.irregularities is not None:
+        table |= {"irregularity_seed": seed.copy(), "irregularity_scale": scale.copy()}
     table |= {k: np.asarray(samples[k], np.float64) for k in names}
     for key in rows[0]:
         table[key] = np.array([row[key] for row in rows])

@@ -37,40 +37,54 @@ from ..simulation import DerailmentLimits, SolverOptions, _compile, solve
 AXIS = "batch"
 
 
-def batched_solve(vehicle, params, track, contact, values, speed, misalignment, *, names,
-                  duration, options: SolverOptions,
-                  limits: DerailmentLimits | None = None):
+def sample_track(track, realise, seed, scale):
+    """``track`` with one sample's irregularity: the realisation ``realise(seed)`` of its
+    spectrum (``realise`` a :class:`~jaxrail.scenarios.irregularities.IrregularitySpec`
+    of given length, or None to keep the track's own), times ``scale``; an ideal track
+    as it is."""
+    if track.irregularity is None:
+        return track
+    irregularity = track.irregularity if realise is None else realise.realise(seed)
+    return track.with_irregularity(eqx.tree_at(lambda i: i.scale, irregularity, scale))
+
+
+def batched_solve(vehicle, params, track, contact, values, speed, misalignment, seed, scale,
+                  *, names, duration, options: SolverOptions,
+                  limits: DerailmentLimits | None = None, realise=None):
     """:func:`jaxrail.simulation.solve` of every sample: ``values`` (B, len(names)) of the
-    named parameters, ``speed`` (B,) [m/s], ``misalignment`` (B,) [m]; everything else
-    shared, ``contact`` the contact model (:mod:`jaxrail.vehicles.loads`), ``limits``
-    the :class:`~jaxrail.simulation.DerailmentLimits` (default ones). Returns a
+    named parameters, ``speed`` (B,) [m/s], ``misalignment`` (B,) [m], the irregularity's
+    ``seed`` (B,) and ``scale`` (B,) (:func:`sample_track`, ``realise`` static);
+    everything else shared, ``contact`` the contact model (:mod:`jaxrail.vehicles.loads`),
+    ``limits`` the :class:`~jaxrail.simulation.DerailmentLimits` (default ones). Returns a
     SimulationResult with a leading batch axis B."""
-    def one(v, s, m):
+    def one(v, s, m, k, a):
         p = set_values(vehicle, params, names, v) if names else params
-        return solve(vehicle, p, track, duration, s, m, options=options, limits=limits,
-                     contact_model=contact)
+        return solve(vehicle, p, sample_track(track, realise, k, a), duration, s, m,
+                     options=options, limits=limits, contact_model=contact)
 
-    return jax.vmap(one)(values, speed, misalignment)
+    return jax.vmap(one)(values, speed, misalignment, seed, scale)
 
 
-def _sharded_solve(vehicle, params, track, contact, values, speed, misalignment, *, devices,
-                   **static):
+def _sharded_solve(vehicle, params, track, contact, values, speed, misalignment, seed, scale,
+                   *, devices, **static):
     """:func:`batched_solve` with the batch split over ``devices`` (a tuple): each
     device runs its rows alone (``jax.shard_map``), the model replicated."""
     if len(devices) == 1:
-        return batched_solve(vehicle, params, track, contact, values, speed, misalignment,
-                             **static)
+        return batched_solve(vehicle, params, track, contact, values, speed, misalignment, seed,
+                             scale, **static)
     model, fixed = eqx.partition((vehicle, params, track, contact), eqx.is_array)
     mesh = jax.sharding.Mesh(np.array(devices), (AXIS,))
     rows = PartitionSpec(AXIS)
 
-    def local(model, values, speed, misalignment):
+    def local(model, values, speed, misalignment, seed, scale):
         vehicle, params, track, contact = eqx.combine(model, fixed)
-        return batched_solve(vehicle, params, track, contact, values, speed, misalignment,
-                             **static)
+        return batched_solve(vehicle, params, track, contact, values, speed, misalignment, seed,
+                             scale, **static)
 
-    return jax.shard_map(local, mesh=mesh, in_specs=(PartitionSpec(), rows, rows, rows),
-                         out_specs=rows, check_vma=False)(model, values, speed, misalignment)
+    return jax.shard_map(local, mesh=mesh,
+                         in_specs=(PartitionSpec(), rows, rows, rows, rows, rows),
+                         out_specs=rows, check_vma=False)(model, values, speed, misalignment,
+                                                          seed, scale)
 
 
 _sharded_jit = eqx.filter_jit(_sharded_solve)
@@ -107,13 +121,14 @@ def chunk_size(requested, n_samples, n_devices):
     return -(-k // n_devices) * n_devices
 
 
-def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None, **static):
+def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None, done=None,
+               **static):
     """Run :func:`batched_solve` on ``model`` = (vehicle, params, track, contact model) and
-    ``inputs`` =
-    (values, speed, misalignment) host arrays with a common leading axis N, in chunks
-    of ``chunk`` rows (the last one padded), sharded over ``devices`` (default: all);
-    ``static``: names, duration, options, limits. ``on_chunk(start, stop, result)``
-    receives each chunk's host result without the padding. The compiled program is
+    ``inputs`` = (values, speed, misalignment, seed, scale) host arrays with a common
+    leading axis N, in chunks of ``chunk`` rows (the last one padded), sharded over
+    ``devices`` (default: all); ``static``: names, duration, options, limits, realise.
+    ``on_chunk(start, stop, result)`` receives each chunk's host result without the
+    padding. ``done`` (N,) bool: samples already run (a chunk of only those is skipped). The compiled program is
     cached per structure, options and chunk (:func:`jaxrail.simulation.simulate`'s
     cache): a second study of the same vehicle does not recompile. Returns (compile
     time [s], 0 if cached; run time [s]; the chunk used, :func:`chunk_size`)."""
@@ -134,6 +149,10 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
     compile_s, run_s = 0.0, 0.0
     for start in range(0, n, chunk):
         stop = min(start + chunk, n)
+        if done is not None and np.all(done[start:stop]):
+            if bar is not None:
+                bar.update(stop - start)
+            continue
         rows = np.concatenate([np.arange(start, stop), np.full(chunk - (stop - start), stop - 1)])
         args = model + tuple(_put(np.asarray(x)[rows], devices) for x in inputs)
         compiled, seconds = _compile(_sharded_jit, *args, devices=devices, **static)

@@ -1,7 +1,9 @@
 """What a Monte Carlo study varies, and the samples drawn from it.
 
 A :class:`Variation` names one input and its spread. Inputs: ``speed`` [m/s],
-``misalignment`` [m] (the initial lateral shift of the vehicle to the left) and any
+``misalignment`` [m] (the initial lateral shift of the vehicle to the left),
+``irregularity_seed`` (the realisation of the scenario's irregularity spectrum, rounded
+down to an integer) and ``irregularity_scale`` (a factor on its irregularity) and any
 parameter of :mod:`jaxrail.vehicles.parameters` (``friction``, ``contact_stiffness``,
 ``primary_lateral_stiffness``, ...), in that parameter's units.
 
@@ -22,7 +24,7 @@ import math
 
 import numpy as np
 
-BOUNDARY_INPUTS = ("speed", "misalignment")
+BOUNDARY_INPUTS = ("speed", "misalignment", "irregularity_seed", "irregularity_scale")
 DESIGNS = ("random", "latin", "grid")
 
 

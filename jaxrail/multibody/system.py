@@ -1,6 +1,6 @@
 """A constrained multibody system: assembly and the equations of motion, eq. (19).
 
-Structure and parameters are separate (DESIGN.md section 2): `System` holds only static
+Structure and parameters are separate (docs/design.md §2): `System` holds only static
 topology (body count and names, and per joint or force kind the body indices of its
 elements), so changing it recompiles; `SystemParams` holds every physical number as a
 float64 array, so it can be batched (vmap) and differentiated. `build_system` makes

@@ -12,12 +12,15 @@ _TITLES = {"alignment": "alignment", "vertical": "vertical level",
            "cross_level": "cross level (left over right rail)", "gauge": "gauge deviation"}
 
 
-def plot_irregularity_psd(irregularity, spectrum, band, path, title=None, segment=1024):
+def plot_irregularity_psd(irregularity, spectrum, band, path, title=None, segment=None):
     """Welch PSD of each channel of ``irregularity`` [m^2/(rad/m)] against ``spectrum``
     (:mod:`jaxrail.track.spectra`) over ``band`` (shortest, longest wavelength [m]), with
     the 95 % band in which a Welch estimate of that spectrum lies (segments of ``segment``
-    samples); PNG at ``path``."""
+    samples: by default the largest power of two up to 4096 that fits eight times);
+    PNG at ``path``."""
     values = np.asarray(irregularity.values).T * float(irregularity.scale)
+    if segment is None:
+        segment = max(256, min(4096, 2 ** int(math.log2(max(values.shape[-1] // 8, 1)))))
     step = float(irregularity.step)
     freq, psd, dof = welch_psd(values, step, segment)
     low, high = confidence_band(dof)

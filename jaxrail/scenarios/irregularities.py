@@ -60,6 +60,11 @@ class IrregularitySpec:
         return irregularity if self.scale == 1.0 else dataclasses.replace(
             irregularity, scale=self.scale)
 
+    def realise(self, seed):
+        """The realisation of this spectrum with ``seed`` (may be traced) over ``length``
+        [m] (set), scale 1 (a Monte Carlo sample's, :mod:`jaxrail.montecarlo.batch`)."""
+        return realisation(self.spectrum, self.length, self.step, seed, self.band)
+
     @property
     def covers_outside(self) -> bool:
         """Whether the irregularity holds beyond its samples (a defect is zero outside

@@ -1,6 +1,6 @@
 """Track geometry at arc length ``s``: centreline, heading, curvature, cant, frames, rails.
 
-Conventions (DESIGN.md §3):
+Conventions (docs/design.md §3):
 
 - Global frame ``X, Y`` horizontal, ``Z`` up. The track is **planar**: no vertical
   gradient; the centreline lies in ``Z = 0``.

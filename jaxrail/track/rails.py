@@ -73,7 +73,7 @@ def rail_frame(
 
 
 def rail_point(
-    track: "Track",
+    track,
     s: Float[ArrayLike, ""],
     side,
     lateral_offset: Float[ArrayLike, ""],

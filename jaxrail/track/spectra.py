@@ -31,7 +31,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .irregularity import CHANNELS, Irregularity
+from .irregularity import Irregularity
 
 HALF_RAIL_DISTANCE = 0.75  # [m] b of the German cross-level spectrum
 DEFAULT_BAND = (3.0, 150.0)  # [m] wavelengths: EN 13848's D1-D3 (3-25, 25-70, 70-150 m)

@@ -95,7 +95,9 @@ def test_limited_rates_keep_the_interpolation_between_levels():
     born) is cut to three times the smaller neighbouring secant, and the Hermite
     interpolation across the levels stays within the levels' range (Fritsch-Carlson);
     rates within the bound are kept as they are."""
-    from jaxrail.contact.table import FIELDS, GEOMETRY, _along_levels, _limit_rates
+    from jaxrail.contact.table import FIELDS, GEOMETRY
+    from jaxrail.contact.table.lookup import _along_levels
+    from jaxrail.contact.table.slots import _limit_rates
 
     heights = np.array([3e-4, 2e-4, 1e-4])  # the wheel comes down 0.1 mm per level
     values = np.zeros((1, 1, 1, 3, 1, len(FIELDS)))

@@ -1,0 +1,121 @@
+"""Looking a wheel's contact up in a table: its pose relative to its rail, the spline
+block around it, the two approach levels around its height, and the contact patches
+derived from the interpolated parts as the search derives them."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ...track.rails import rail_displacement, rail_under_wheel, wheel_origin
+from ..patches import wide_point
+from ..search import ContactPatches, contact_geometry
+from ..strip import wheel_frame, wheel_surface_point
+from .grid import _RATES, _VALUES, FIELDS, GEOMETRY, ContactTable
+from .spline import _pose_weights
+
+def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotation, side):
+    """Pose of one wheel relative to its rail (module docstring).
+
+    Returns ``(lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, wheel_origin,
+    frame)``: the four pose coordinates [m, m, rad, rad], the rail section's arc length
+    [m], origin (3,) and axes (3, 3), and the wheel's origin (3,) and
+    :class:`~jaxrail.contact.strip.WheelFrame`."""
+    axle = wheelset_rotation[:, 1]
+    origin = wheel_origin(wheelset_position, wheelset_rotation, side)
+    s_rail, rail_origin, rail_axes = rail_under_wheel(track, rail_offset, origin, side)
+    frame = wheel_frame(axle, rail_axes[:, 0])
+    taping = origin - radius * frame.up - rail_origin
+    local = rail_axes.T @ axle
+    roll = jnp.arcsin(jnp.clip(local[2], -1.0, 1.0))
+    yaw = jnp.arctan2(-local[0], local[1])
+    return (taping @ rail_axes[:, 1], taping @ rail_axes[:, 2], yaw, roll, s_rail, rail_origin,
+            rail_axes, origin, frame)
+
+def _two_levels(heights, vertical):
+    """The levels ``i, i + 1`` around the wheel's ``vertical`` position [m] (``heights``
+    (A,) decreasing: the wheel lower at deeper levels; the first or last pair beyond
+    them)."""
+    i = jnp.clip(jnp.sum(heights > vertical) - 1, 0, heights.shape[0] - 2)
+    return i + jnp.arange(2)
+
+def _along_levels(heights, fields, vertical, levels):
+    """Per slot the depth [m] and the geometry (:data:`GEOMETRY`) at the wheel's
+    ``vertical`` position [m] from the two approach levels around it (``heights`` (2,),
+    the wheel lower at the second; ``fields`` (2, P, F); their depths ``levels`` (2,)),
+    by cubic Hermite interpolation in the vertical position (C1): the depth from each
+    level's depth and slope (beyond the levels, the nearer level's line), the geometry
+    from its values and rates (beyond the levels, the nearer level's values)."""
+    z0, z1 = heights[0], heights[1]
+    span = z0 - z1  # the wheel comes down by this from level i to i + 1
+    t = jnp.clip((z0 - vertical) / span, 0.0, 1.0)
+    # No patch is deeper than the level's deepest depth, and none deepens faster than
+    # the wheel comes down (guards against nodes where the search's refined depth jumps)
+    slope = jnp.clip(fields[:, :, 1], 0.0, 1.0)
+    at_level = jnp.minimum(fields[:, :, 0] - fields[:, :, 1] * heights[:, None], levels[:, None])
+    h00, h10 = 2 * t ** 3 - 3 * t ** 2 + 1, t ** 3 - 2 * t ** 2 + t
+    h01, h11 = -2 * t ** 3 + 3 * t ** 2, t ** 3 - t ** 2
+    hermite = (h00 * at_level[0] + h10 * span * slope[0] + h01 * at_level[1]
+               + h11 * span * slope[1])
+    first = at_level[0] + slope[0] * (z0 - vertical)
+    last = at_level[1] + slope[1] * (z1 - vertical)
+    depth = jnp.where(vertical > z0, first, jnp.where(vertical < z1, last, hermite))
+    value, rate = fields[:, :, _VALUES], fields[:, :, _RATES]
+    geometry = (h00 * value[0] + h10 * span * rate[0] + h01 * value[1] + h11 * span * rate[1])
+    return depth, geometry
+
+def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset_position,
+                  wheelset_rotation, side) -> ContactPatches:
+    """Contact patches of one wheel from ``table`` instead of the search: the same
+    :class:`ContactPatches` as :func:`jaxrail.contact.search_wheel` (leading shape
+    ``(P,)``), each patch's penetration interpolated between the approach levels in the
+    wheel's vertical position (:func:`_along_levels`)."""
+    side = jnp.asarray(side, dtype=jnp.float64)
+    (lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, origin,
+     frame) = relative_pose(track, rail_offset, table.radius, wheelset_position,
+                            wheelset_rotation, side)
+    side_index = jnp.where(side > 0.0, 0, 1).astype(jnp.int32)
+    slots, count = len(table.surfaces), table.shape[4]
+    nodes, weight = _pose_weights(table, side_index, lateral, yaw, roll)
+    heights = weight @ table.heights[nodes]
+    two = _two_levels(heights, vertical)
+    block = table.rows[(nodes[:, None] * count + two).reshape(-1)].reshape(len(nodes), 2, -1)
+    # (as an einsum over (node, level) with the weights broadcast: XLA:CPU runs the same
+    # sum as a matrix product with the levels folded into the columns 2.4 times slower)
+    weights = jnp.broadcast_to(weight[:, None], (len(nodes), 2))
+    fields = jnp.einsum("nl,nlf->lf", weights, block).reshape(2, slots, len(FIELDS))
+    depth, interpolated = _along_levels(heights[two], fields, vertical,
+                                        jnp.asarray(table.grid.levels)[two])
+    y_deepest, centre, breadth, rail_from_wheel, curvature = (
+        interpolated[:, k] for k in range(len(GEOMETRY)))
+    y_wheel, _ = wide_point(y_deepest, centre, breadth)  # as the search places it
+    y_rail = y_wheel + rail_from_wheel
+    active = depth > 0.0
+    penetration = jnp.where(active, depth, 0.0)
+    surfaces = np.asarray(table.surfaces)
+
+    def geometry_at(surface, yw, yr):
+        # the wheel point as the search places it on the wheel in its actual pose
+        point, s_wheel = wheel_surface_point(surface, wheel.nominal_radius, yw, origin, frame,
+                                             side)
+        dx = (point - rail_origin) @ rail_axes[:, 0]
+        return dict(wheel_point=point, s_wheel=s_wheel, dx=dx,
+                    **contact_geometry(surface, rail, wheel.nominal_radius, yw, yr, dx,
+                                       rail_origin, rail_axes, side))
+
+    parts = []
+    for k, surface in enumerate(wheel.surfaces):  # each surface's slots (contiguous)
+        mine = np.flatnonzero(surfaces == k)
+        parts.append(jax.vmap(lambda yw, yr: geometry_at(surface, yw, yr))(
+            y_wheel[mine], y_rail[mine]))
+    geometry = jax.tree.map(lambda *x: jnp.concatenate(x), *parts)
+    return ContactPatches(
+        active=active,
+        penetration=penetration,
+        surface=jnp.asarray(surfaces, dtype=jnp.int32),
+        y_wheel=y_wheel,
+        y_rail=y_rail,
+        s_rail=jnp.full(y_wheel.shape, s_rail),
+        y_track=side * (rail_offset + y_rail) + rail_displacement(track, s_rail, side)[0],
+        curvature_contact_y=curvature,
+        **geometry,
+    )

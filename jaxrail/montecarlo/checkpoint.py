@@ -1,0 +1,85 @@
+"""A study's finished chunks on disk, so that an interrupted study resumes.
+
+After each chunk the rows of every finished sample are written to one JSON file, whole
+or not at all (:func:`jaxrail._files.write_text`), with a key of the study: a hash of
+the scenario (every value it was read into), the samples drawn (so the seed, the
+design and the variations), the duration, the contact mode and the chunk size. A
+second run of the same study skips the chunks it finds finished; a different study
+refuses the file unless asked to overwrite it.
+"""
+
+import dataclasses
+import hashlib
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .._files import write_text
+
+FORMAT = "jaxrail montecarlo checkpoint 1"
+
+
+def study_key(scenario, samples: dict, duration, contact, chunk) -> str:
+    """Hex key of a study (module docstring)."""
+    described = {
+        "scenario": dataclasses.asdict(scenario),
+        "samples": {k: np.asarray(v, np.float64).tolist() for k, v in sorted(samples.items())},
+        "duration": float(duration), "contact": contact, "chunk": chunk,
+    }
+    text = json.dumps(described, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+def _plain(value):
+    """A row's value as JSON takes it (NumPy scalars as Python numbers)."""
+    if isinstance(value, (np.floating, float)):
+        return float(value)
+    if isinstance(value, (np.integer, int)) and not isinstance(value, bool):
+        return int(value)
+    return value
+
+
+@dataclasses.dataclass
+class Checkpoint:
+    """The finished rows ``{sample index: row}`` of the study ``study`` kept at ``path``."""
+
+    path: Path
+    study: str
+    samples: int
+    rows: dict
+
+    @classmethod
+    def open(cls, path, study: str, samples: int, overwrite: bool = False) -> "Checkpoint":
+        """The checkpoint at ``path``: its rows when it holds this study, empty when there is
+        none (or ``overwrite``); ValueError when it holds another study or is not one."""
+        path = Path(path)
+        if not path.exists() or overwrite:
+            return cls(path, study, samples, {})
+        try:
+            saved = json.loads(path.read_text(encoding="utf-8"))
+            if saved.get("format") != FORMAT:
+                raise ValueError("not a checkpoint")
+        except (ValueError, UnicodeDecodeError) as error:
+            raise ValueError(f"{path}: not a jaxrail Monte Carlo checkpoint ({error}); remove it "
+                             "or pass --overwrite") from None
+        if saved["study"] != study or saved["samples"] != samples:
+            raise ValueError(f"{path}: holds the finished chunks of another study (the "
+                             "scenario, samples, seed, variations, duration, contact mode or "
+                             "chunk differ); remove it or pass --overwrite to start again")
+        rows = {int(k): {key: (math.nan if v is None else v) for key, v in row.items()}
+                for k, row in saved["rows"].items()}
+        return cls(path, study, samples, rows)
+
+    def add(self, rows: dict) -> None:
+        """Keep ``rows`` {sample index: row} and write the file whole."""
+        self.rows.update(rows)
+        data = {"format": FORMAT, "study": self.study, "samples": self.samples,
+                "rows": {str(k): {key: _plain(v) for key, v in row.items()}
+                         for k, row in sorted(self.rows.items())}}
+        write_text(self.path, json.dumps(data, allow_nan=True))
+
+    def remove(self) -> None:
+        """Delete the file (the study is complete and its table written)."""
+        self.path.unlink(missing_ok=True)

@@ -1,0 +1,134 @@
+"""Monte Carlo over irregularity realisations, and a study that resumes: a process killed
+after its first chunk is written leaves a checkpoint; the same command then finishes,
+and its table equals that of an uninterrupted run. A different study refuses the
+checkpoint unless asked to overwrite it.
+
+A single wheelset for 0.1 s on straight track with German-high irregularities, the
+seed and the amplitude scale drawn (each process compiles once: the programs are kept in
+jaxrail's persistent cache between them)."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from jaxrail.montecarlo import read_table
+from jaxrail.montecarlo.checkpoint import Checkpoint
+
+SCENARIO = """
+name = "wheelset-irregular"
+[vehicle]
+model = "single-wheelset"
+wheel = "s1002"
+rail = "uic60"
+inclination = "1:40"
+[track]
+segments = [{ kind = "straight", length = 60.0 }]
+[irregularities]
+spectrum = "german-high"
+seed = 1
+[run]
+speed = 10.0
+misalignment = 0.0
+duration = 0.1
+[solver]
+rtol = 1e-4
+atol = 1e-7
+output_rate = 100.0
+"""
+
+
+def _command(scenario, out, *extra):
+    return [sys.executable, "-m", "jaxrail.cli", "montecarlo", str(scenario), "--samples", "6",
+            "--chunk", "1", "--seed", "3", "--vary", "irregularity_seed=0:1000",
+            "--vary", "irregularity_scale=0.5:1.5", "--out", str(out), "--quiet", *extra]
+
+
+def test_a_killed_study_resumes_to_the_uninterrupted_table(tmp_path):
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(SCENARIO)
+    env = dict(os.environ, JAXRAIL_CACHE_DIR=str(tmp_path / "cache"))
+    whole = tmp_path / "whole.csv"
+    done = subprocess.run(_command(scenario, whole), env=env, capture_output=True, text=True,
+                          timeout=900)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert not (tmp_path / "whole.csv.chunks.json").exists()  # removed once written
+    table = read_table(whole)
+    assert list(table["status"]) == ["successful"] * 6
+    seeds = np.asarray(table["irregularity_seed"])
+    assert np.all(seeds == np.floor(seeds)) and len(set(seeds)) == 6
+    assert np.all((table["irregularity_scale"] >= 0.5) & (table["irregularity_scale"] <= 1.5))
+    # every realisation runs its own way
+    assert len(set(np.round(table["max_lateral_displacement_1_m"], 9))) == 6
+
+    out = tmp_path / "resumed.csv"
+    checkpoint = tmp_path / "resumed.csv.chunks.json"
+    process = subprocess.Popen(_command(scenario, out), env=env, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 900
+        while not checkpoint.exists() and process.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        os.killpg(process.pid, signal.SIGKILL)
+    finally:
+        process.wait()
+    assert checkpoint.exists() and not out.exists()
+    rows = json.loads(checkpoint.read_text())["rows"]
+    assert 1 <= len(rows) < 6, len(rows)  # killed after its first chunk, before the last
+
+    again = subprocess.run(_command(scenario, out), env=env, capture_output=True, text=True,
+                           timeout=900)
+    assert again.returncode == 0, again.stderr[-2000:]
+    assert "resuming from the finished chunks" in again.stderr
+    first, second = read_table(whole), read_table(out)
+    assert list(first) == list(second)
+    for key in first:
+        if np.asarray(first[key]).dtype.kind == "f":
+            np.testing.assert_array_equal(first[key], second[key])
+        else:
+            assert list(first[key]) == list(second[key])
+    assert not checkpoint.exists()
+
+
+def test_another_study_refuses_the_checkpoint_unless_overwritten(tmp_path):
+    path = tmp_path / "t.csv.chunks.json"
+    saved = Checkpoint.open(path, "study-a", 4)
+    saved.add({0: {"status": "successful", "max_normal_force_N": 1.5e4, "steps": 12,
+                   "simulated_time_s": float("nan")}})
+    again = Checkpoint.open(path, "study-a", 4)
+    assert again.rows[0]["steps"] == 12 and np.isnan(again.rows[0]["simulated_time_s"])
+    with pytest.raises(ValueError, match="another study.*--overwrite"):
+        Checkpoint.open(path, "study-b", 4)
+    assert Checkpoint.open(path, "study-b", 4, overwrite=True).rows == {}
+    path.write_text("not json")
+    with pytest.raises(ValueError, match="not a jaxrail Monte Carlo checkpoint"):
+        Checkpoint.open(path, "study-a", 4)
+
+
+@pytest.mark.parametrize("vary, message", [
+    ("irregularity_scale=-1:1", "irregularity_scale"),
+    ("irregularity_seed=-5:3", "irregularity_seed"),
+])
+def test_bad_irregularity_draws_are_named(tmp_path, vary, message, capsys):
+    from jaxrail.cli import main
+
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(SCENARIO)
+    assert main(["montecarlo", str(scenario), "--samples", "2", "--vary", vary]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_varying_the_seed_of_a_track_without_irregularities_is_refused(tmp_path, capsys):
+    from jaxrail.cli import main
+
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(SCENARIO.replace('[irregularities]\nspectrum = "german-high"\nseed = 1\n',
+                                         ""))
+    assert main(["montecarlo", str(scenario), "--samples", "2",
+                 "--vary", "irregularity_seed=0:9"]) == 2
+    assert "has no [irregularities] to vary" in capsys.readouterr().err
