@@ -1,18 +1,12 @@
-"""Monte Carlo over irregularity realisations, and a study that resumes: a process killed
-after its first chunk is written leaves a checkpoint; the same command then finishes,
-and its table equals that of an uninterrupted run. A different study refuses the
-checkpoint unless asked to overwrite it.
+"""Monte Carlo over irregularity realisations, and a study that resumes: a study that
+dies after its first chunk is written leaves a checkpoint; the same command then
+finishes, and its table equals that of an uninterrupted run. A different study refuses
+the checkpoint unless asked to overwrite it.
 
 A single wheelset for 0.1 s on straight track with German-high irregularities, the
-seed and the amplitude scale drawn (each process compiles once: the programs are kept in
-jaxrail's persistent cache between them)."""
+seed and the amplitude scale drawn."""
 
 import json
-import os
-import signal
-import subprocess
-import sys
-import time
 
 import numpy as np
 import pytest
@@ -44,19 +38,26 @@ output_rate = 100.0
 
 
 def _command(scenario, out, *extra):
-    return [sys.executable, "-m", "jaxrail.cli", "montecarlo", str(scenario), "--samples", "6",
-            "--chunk", "1", "--seed", "3", "--vary", "irregularity_seed=0:1000",
-            "--vary", "irregularity_scale=0.5:1.5", "--out", str(out), "--quiet", *extra]
+    return ["montecarlo", str(scenario), "--samples", "6", "--chunk", "1", "--seed", "3",
+            "--vary", "irregularity_seed=0:1000", "--vary", "irregularity_scale=0.5:1.5",
+            "--out", str(out), "--quiet", *extra]
 
 
-def test_a_killed_study_resumes_to_the_uninterrupted_table(tmp_path):
+class Killed(BaseException):
+    """The process dies (no handler of the command's catches it)."""
+
+
+def test_a_killed_study_resumes_to_the_uninterrupted_table(tmp_path, monkeypatch, capsys):
+    """The study dies right after its first chunk's checkpoint is written (the moment a
+    kill leaves behind: the file is written whole, then nothing more happens); the same
+    command then finishes from it. One process, so the three runs share one compiled
+    program."""
+    from jaxrail.cli import main
+
     scenario = tmp_path / "scenario.toml"
     scenario.write_text(SCENARIO)
-    env = dict(os.environ, JAXRAIL_CACHE_DIR=str(tmp_path / "cache"))
     whole = tmp_path / "whole.csv"
-    done = subprocess.run(_command(scenario, whole), env=env, capture_output=True, text=True,
-                          timeout=900)
-    assert done.returncode == 0, done.stderr[-2000:]
+    assert main(_command(scenario, whole)) == 0
     assert not (tmp_path / "whole.csv.chunks.json").exists()  # removed once written
     table = read_table(whole)
     assert list(table["status"]) == ["successful"] * 6
@@ -68,23 +69,23 @@ def test_a_killed_study_resumes_to_the_uninterrupted_table(tmp_path):
 
     out = tmp_path / "resumed.csv"
     checkpoint = tmp_path / "resumed.csv.chunks.json"
-    process = subprocess.Popen(_command(scenario, out), env=env, stdout=subprocess.DEVNULL,
-                               stderr=subprocess.DEVNULL, start_new_session=True)
-    try:
-        deadline = time.monotonic() + 900
-        while not checkpoint.exists() and process.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.01)
-        os.killpg(process.pid, signal.SIGKILL)
-    finally:
-        process.wait()
+    write = Checkpoint.add
+
+    def add_then_die(self, rows):
+        write(self, rows)
+        raise Killed
+
+    monkeypatch.setattr(Checkpoint, "add", add_then_die)
+    with pytest.raises(Killed):
+        main(_command(scenario, out))
+    monkeypatch.setattr(Checkpoint, "add", write)
     assert checkpoint.exists() and not out.exists()
     rows = json.loads(checkpoint.read_text())["rows"]
-    assert 1 <= len(rows) < 6, len(rows)  # killed after its first chunk, before the last
+    assert list(rows) == ["0"]  # the first chunk, and only it
+    capsys.readouterr()
 
-    again = subprocess.run(_command(scenario, out), env=env, capture_output=True, text=True,
-                           timeout=900)
-    assert again.returncode == 0, again.stderr[-2000:]
-    assert "resuming from the finished chunks" in again.stderr
+    assert main(_command(scenario, out)) == 0
+    assert "resuming from the finished chunks" in capsys.readouterr().err
     first, second = read_table(whole), read_table(out)
     assert list(first) == list(second)
     for key in first:
