@@ -177,7 +177,8 @@ def _band(text):
     try:
         return float(lo), float(hi)
     except ValueError:
-        raise ValueError(f"--band must be LO:HI wavelengths in m, e.g. 3:150, got {text!r}") from None
+        raise ValueError(f"--band must be LO:HI wavelengths in m, e.g. 3:150, got "
+                         f"{text!r}") from None
 
 
 def _track_command(args):

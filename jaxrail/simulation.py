@@ -31,6 +31,7 @@ from ._progress import SimulatedTimeBar
 from .multibody import constraints, simulate_system
 from .multibody.imex import IMEX
 from .track import to_track_coordinates, track_frame
+from .track.irregularity import rail_offsets
 from .track.rails import HALF_TAPING_DISTANCE, track_irregularity
 from .vehicles.initial import initial_state
 from .vehicles.loads import VehicleLoads, contact_loads, resolve_contact_model
@@ -205,7 +206,7 @@ def _wheelset_track_coordinates(vehicle, track, q, qdot):
         axle = frame.T @ a[:, 1]
         yaw = -jnp.arctan2(axle[0], axle[1])
         irregularity = track_irregularity(track, s)
-        rail_heights = irregularity[1] + 0.5 * sides * irregularity[2]  # v + side c / 2
+        rail_heights = rail_offsets(irregularity, sides)[1]
         wheel_heights = vertical + sides * HALF_TAPING_DISTANCE * axle[2] - rail_heights
         return lateral, vertical, yaw, wheel_heights, irregularity
     return jax.vmap(one)(position, rotation)
@@ -227,10 +228,13 @@ def _stop_events(vehicle, track, limits, rest_height):
     return diffrax.Event((derailed, not_finite))
 
 
-def _starts_derailed(limits, lateral0, misalignment):
+def _starts_derailed(limits, lateral0, irregularity0, misalignment):
     """Whether a run starts beyond the lateral limit: its initial wheelsets (lateral0
-    (W,) [m], from the irregular track's centre) are, or the start is not finite and the misalignment asked for is beyond
-    it (the static equilibrium of a wheel off its rail does not exist)."""
+    (W,) [m] from the design centreline, less the alignment of ``irregularity0`` (W, 4)
+    [m]: from the irregular track's centre) are, or the start is not finite and the
+    misalignment asked for is beyond it (the static equilibrium of a wheel off its rail
+    does not exist)."""
+    lateral0 = lateral0 - irregularity0[:, 0]
     unknown = ~jnp.all(jnp.isfinite(lateral0))
     return (jnp.any(jnp.abs(lateral0) > limits.lateral)
             | (unknown & (jnp.abs(misalignment) > limits.lateral)))
@@ -288,8 +292,8 @@ def _results(vehicle, params, track, model, q0, qdot0, ts, q, qdot, result, dera
     return SimulationResult(
         t=ts, q=q, qdot=qdot, valid=valid, wheelset_lateral=nan(lateral),
         wheelset_vertical=nan(vertical - rest_vertical), wheelset_yaw=nan(yaw),
-        irregularity=nan(irregularity), wheels=wheels, constraint_violation=nan(violation), result=result,
-        derailed=jnp.asarray(derailed), steps=steps, accepted_steps=accepted_steps,
+        irregularity=nan(irregularity), wheels=wheels, constraint_violation=nan(violation),
+        result=result, derailed=jnp.asarray(derailed), steps=steps, accepted_steps=accepted_steps,
         rejected_steps=rejected_steps, wall_time_s=jnp.asarray(jnp.nan),
         compile_time_s=jnp.asarray(jnp.nan))
 
@@ -318,14 +322,14 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
     q0, qdot0 = _start(vehicle, params, track, speed, misalignment, s0, initial, loads.model)
     lateral0, _, _, rest_heights, irregularity0 = _wheelset_track_coordinates(vehicle, track,
                                                                               q0, qdot0)
-    lateral0 = lateral0 - irregularity0[:, 0]  # from the irregular track's centre
     ts = jnp.linspace(0.0, t1, options.n_outputs)
     sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
                      options.controller()[1], options, limits, solver, adjoint)
     q, qdot = sol.ys
     # a state that only turned non-finite is not derailed: diffrax's event_occurred
     # result makes the status "failed"
-    derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, misalignment)
+    derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, irregularity0,
+                                                    misalignment)
     return _results(vehicle, params, track, loads.model, q0, qdot0, sol.ts, q, qdot,
                     sol.result, derailed, sol.stats["num_steps"],
                     sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
@@ -400,8 +404,7 @@ def _run_in_segments(timer, vehicle, params, track, t1, q0, qdot0, options, limi
     q[0], qdot[0] = q0, qdot0
     lateral0, _, _, rest_heights, irregularity0 = timer.run(_wheelset_track_coordinates,
                                                             vehicle, track, q0, qdot0)
-    lateral0 = lateral0 - irregularity0[:, 0]  # from the irregular track's centre
-    started = _starts_derailed(limits, lateral0, misalignment)
+    started = _starts_derailed(limits, lateral0, irregularity0, misalignment)
     static = dict(options=options, limits=limits, solver=solver, contact_model=contact_model)
     result, derailed, counts = diffrax.RESULTS.successful, False, np.zeros(3, dtype=int)
     t0, dt0, state = 0.0, options.controller()[1], (q0, qdot0)

@@ -20,7 +20,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
 from ..profiles._base import Profile, WheelProfile
-from ..track.rails import rail_displacement, rail_under_wheel, wheel_origin
+from ..track.rails import lateral_from_centre, rail_under_wheel, wheel_origin
 from .patches import (SECANT_SPAN, find_patches, overlap_density, refine_maximum, secant_curvature,
                       wide_point)
 from .strip import strip_point, wheel_frame
@@ -254,8 +254,7 @@ def search_wheel_parts(wheel: WheelProfile, rail: Profile, track, rail_offset, w
     located = {key: data.pop(key) for key in PARTS}
     data["surface"] = data["surface"].astype(jnp.int32)
     data["s_rail"] = jnp.full((slots,), s_rail)
-    data["y_track"] = side * (rail_offset + data["y_rail"]) + rail_displacement(track, s_rail,
-                                                                                side)[0]
+    data["y_track"] = lateral_from_centre(track, rail_offset, s_rail, side, data["y_rail"])
     return ContactPatches(**data), located
 
 

@@ -128,7 +128,8 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
     leading axis N, in chunks of ``chunk`` rows (the last one padded), sharded over
     ``devices`` (default: all); ``static``: names, duration, options, limits, realise.
     ``on_chunk(start, stop, result)`` receives each chunk's host result without the
-    padding. ``done`` (N,) bool: samples already run (a chunk of only those is skipped). The compiled program is
+    padding. ``done`` (N,) bool: samples already run (a chunk of only those is
+    skipped). The compiled program is
     cached per structure, options and chunk (:func:`jaxrail.simulation.simulate`'s
     cache): a second study of the same vehicle does not recompile. Returns (compile
     time [s], 0 if cached; run time [s]; the chunk used, :func:`chunk_size`)."""

@@ -79,7 +79,3 @@ class Checkpoint:
                 "rows": {str(k): {key: _plain(v) for key, v in row.items()}
                          for k, row in sorted(self.rows.items())}}
         write_text(self.path, json.dumps(data, allow_nan=True))
-
-    def remove(self) -> None:
-        """Delete the file (the study is complete and its table written)."""
-        self.path.unlink(missing_ok=True)

@@ -47,18 +47,15 @@ class IrregularitySpec:
 
     def build(self, track_length: float):
         """The :class:`~jaxrail.track.Irregularity` (a realisation over ``length``, else
-        ``track_length`` [m]; the file; the dip)."""
+        ``track_length`` [m]; the file; the dip), times ``scale``."""
         if self.source == "spectrum":
             length = self.length if self.length is not None else track_length
-            return realisation(self.spectrum, length, self.step, self.seed, self.band, self.scale)
-        if self.source == "file":
+            irregularity = realisation(self.spectrum, length, self.step, self.seed, self.band)
+        elif self.source == "file":
             irregularity = read_irregularity(self.file)
-            return irregularity if self.scale == 1.0 else dataclasses.replace(
-                irregularity, scale=self.scale)
-        kind, wavelength, amplitude, position = self.defect
-        irregularity = cosine_defect(kind, wavelength, amplitude, position)
-        return irregularity if self.scale == 1.0 else dataclasses.replace(
-            irregularity, scale=self.scale)
+        else:
+            irregularity = cosine_defect(*self.defect)
+        return dataclasses.replace(irregularity, scale=self.scale)
 
     def realise(self, seed):
         """The realisation of this spectrum with ``seed`` (may be traced) over ``length``

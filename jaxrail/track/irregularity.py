@@ -85,14 +85,16 @@ class Irregularity(eqx.Module):
 
     def rail_displacement(self, s, side) -> tuple[Float[Array, ""], Float[Array, ""]]:
         """``(lateral, vertical)`` [m] of the ``side`` rail (+1 left, -1 right) at ``s``
-        [m]: ``a + side g / 2`` along the track's ``n``, ``v + side c / 2`` along ``b``."""
-        a, v, c, g = self.at(s)
-        return a + 0.5 * side * g, v + 0.5 * side * c
+        [m] (:func:`rail_offsets`)."""
+        return rail_offsets(self.at(s), side)
 
 
-def zero_irregularity(start: float = 0.0, end: float = 1.0) -> Irregularity:
-    """No irregularity over ``[start, end]`` [m] (a placeholder of the smallest size)."""
-    return Irregularity(np.zeros((2, len(CHANNELS))), start, end - start)
+def rail_offsets(channels, side):
+    """``(lateral, vertical)`` [m] of the ``side`` rail (+1 left, -1 right; an array of
+    sides gives one of each) from the four ``channels`` (4,) [m]: ``a + side g / 2``
+    along the track's ``n``, ``v + side c / 2`` along ``b``."""
+    a, v, c, g = channels
+    return a + 0.5 * side * g, v + 0.5 * side * c
 
 
 def sampled(values, start: float, step: float, scale: float = 1.0) -> Irregularity:

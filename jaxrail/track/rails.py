@@ -114,6 +114,13 @@ def rail_under_wheel(track, rail_offset, origin, side, s_guess=None):
     return s_rail, rail_origin, rail_axes
 
 
+def lateral_from_centre(track, rail_offset, s, side, y_rail):
+    """Lateral position [m] from the design track centre (along the canted ``n``,
+    positive left) of the point ``y_rail`` [m] (toward the field side) of the ``side``
+    rail's profile at ``s`` [m], with the rail's irregularity."""
+    return side * (rail_offset + y_rail) + rail_displacement(track, s, side)[0]
+
+
 def track_irregularity(track, s) -> Float[Array, "4"]:
     """The four irregularity channels [m] at ``s`` [m] (:data:`.irregularity.CHANNELS`),
     zeros on an ideal track."""

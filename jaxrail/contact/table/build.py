@@ -32,6 +32,7 @@ def _pose_on_straight(track, rail_offset, radius, lateral, vertical, yaw, roll, 
     origin = rail_origin + lateral * rail_axes[:, 1] + vertical * rail_axes[:, 2] + radius * up
     return origin - side * HALF_TAPING_DISTANCE * axle, rotation
 
+
 def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, levels):
     """The search at one node (lateral [m], yaw [rad], roll [rad]) of the ``side`` rail
     with the wheel lowered until its deepest patch penetrates each of the ``levels`` [m].
@@ -97,12 +98,14 @@ def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, le
     depth = values[..., 0] - values[..., 1] * heights[:, None]
     return found, values, depth, heights, jnp.max(jnp.abs(jnp.stack(misses)))
 
+
 @eqx.filter_jit
 def _run_nodes(wheel, rail, rail_offset, nodes, side, config, radius, levels):
     """:func:`_node` vmapped over ``nodes`` (N, 3) (one compilation for both sides and
     every chunk)."""
     return jax.vmap(lambda x: _node(wheel, rail, rail_offset, x[0], x[1], x[2], side, config,
                                     radius, levels))(nodes)
+
 
 def _search_side(wheel, rail, rail_offset, config, grid, side, chunk, progress):
     """The search at every node of ``grid`` for the ``side`` rail, in compiled batches of
@@ -123,6 +126,7 @@ def _search_side(wheel, rail, rail_offset, config, grid, side, chunk, progress):
             progress(start + len(batch))
     shape = (grid.lateral.count, grid.yaw.count, grid.roll.count)
     return tuple(np.concatenate(x).reshape(shape + np.shape(x[0])[1:]) for x in zip(*parts))
+
 
 def build_contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchConfig(),
                         grid: TableGrid = TableGrid(), chunk: int = 256,

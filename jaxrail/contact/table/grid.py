@@ -42,6 +42,7 @@ class Axis(eqx.Module):
         count = math.ceil((hi - lo) / step - 1e-9) + 1
         return cls(float(lo), (hi - lo) / (count - 1), count)
 
+
 class TableGrid(eqx.Module):
     """Grid of a contact table: lateral [m], yaw [rad] and roll [rad] axes, and the
     approach axis in the square root of the deepest patch's depth [m^0.5] (the search
@@ -61,6 +62,7 @@ class TableGrid(eqx.Module):
     def levels(self) -> tuple[float, ...]:
         """Depths [m] of the deepest patch at the approach nodes."""
         return tuple(float(x) ** 2 for x in self.approach.nodes)
+
 
 class ContactTable(eqx.Module):
     """Tabulated contact of one wheel profile on its rail, both sides.

@@ -6,12 +6,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ...track.rails import rail_displacement, rail_under_wheel, wheel_origin
+from ...track.rails import lateral_from_centre, rail_under_wheel, wheel_origin
 from ..patches import wide_point
 from ..search import ContactPatches, contact_geometry
 from ..strip import wheel_frame, wheel_surface_point
 from .grid import _RATES, _VALUES, FIELDS, GEOMETRY, ContactTable
 from .spline import _pose_weights
+
 
 def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotation, side):
     """Pose of one wheel relative to its rail (module docstring).
@@ -31,12 +32,14 @@ def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotati
     return (taping @ rail_axes[:, 1], taping @ rail_axes[:, 2], yaw, roll, s_rail, rail_origin,
             rail_axes, origin, frame)
 
+
 def _two_levels(heights, vertical):
     """The levels ``i, i + 1`` around the wheel's ``vertical`` position [m] (``heights``
     (A,) decreasing: the wheel lower at deeper levels; the first or last pair beyond
     them)."""
     i = jnp.clip(jnp.sum(heights > vertical) - 1, 0, heights.shape[0] - 2)
     return i + jnp.arange(2)
+
 
 def _along_levels(heights, fields, vertical, levels):
     """Per slot the depth [m] and the geometry (:data:`GEOMETRY`) at the wheel's
@@ -62,6 +65,7 @@ def _along_levels(heights, fields, vertical, levels):
     value, rate = fields[:, :, _VALUES], fields[:, :, _RATES]
     geometry = (h00 * value[0] + h10 * span * rate[0] + h01 * value[1] + h11 * span * rate[1])
     return depth, geometry
+
 
 def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset_position,
                   wheelset_rotation, side) -> ContactPatches:
@@ -115,7 +119,7 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
         y_wheel=y_wheel,
         y_rail=y_rail,
         s_rail=jnp.full(y_wheel.shape, s_rail),
-        y_track=side * (rail_offset + y_rail) + rail_displacement(track, s_rail, side)[0],
+        y_track=lateral_from_centre(track, rail_offset, s_rail, side, y_rail),
         curvature_contact_y=curvature,
         **geometry,
     )

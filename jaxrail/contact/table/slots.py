@@ -27,9 +27,11 @@ def _distance(a, b):
     to node (by tenths of a millimetre per node in flange contact)."""
     return abs(a[0] - b[0]) + 10.0 * abs(a[1] - b[1]) + 1.0e-3 * abs(a[2] - b[2])
 
+
 def _key(value, depth):
     """(wheel coordinate, depth, depth slope) of a patch's values (F + 1,) and depth [m]."""
     return np.array([value[_WHERE], depth, value[1]])
+
 
 def _pair(old, new, cost, limit):
     """Order-preserving pairs ``(i, j)`` of ``old[i]`` with ``new[j]`` (both sorted along
@@ -49,6 +51,7 @@ def _pair(old, new, cost, limit):
                 if total < best_cost:
                     best, best_cost = list(zip(olds, news)), total
     return best
+
 
 def _track_line(found, values, depth, surfaces, heights):
     """Slot-consistent values (L, P, F) and owned flags (L, P) of one lateral line:
@@ -117,6 +120,7 @@ def _track_line(found, values, depth, surfaces, heights):
             out[i, j, 0] += out[i, j, 1] * (heights[i] - heights[near]) - fall
     return out, owner >= 0
 
+
 def _fall(held, owner, near, i):
     """How fast [m per node] a slot's depth falls from ``near``, the last node whose
     patch it held (``held``: the depths), toward ``i``: the patch's own trend over the
@@ -128,6 +132,7 @@ def _fall(held, owner, near, i):
     if 0 <= inner < len(held) and owner[inner] == owner[near]:
         trend = held[inner] - held[near]
     return max(float(np.clip(trend, _RAMP_MIN, _RAMP)), float(held[near]))
+
 
 def _match(found, values, depth, reference, owned, surfaces, rigid, height, reference_height):
     """Values (P, F) of a node in the slots of an already assigned neighbour
@@ -169,6 +174,7 @@ def _match(found, values, depth, reference, owned, surfaces, rigid, height, refe
         return out, taken
     return out, owned | taken
 
+
 def _assign_slots(found, values, depth, heights, surfaces):
     """Slot-consistent values (L, Y, R, A, P, F) of a whole grid (lateral, yaw, roll,
     approach): patches tracked along the lateral axis on the central yaw and roll line
@@ -202,6 +208,7 @@ def _assign_slots(found, values, depth, heights, surfaces):
                 for m in range(n_app):
                     match(i, j, k, m, (j, toward, m), False)
     return out
+
 
 def _limit_rates(values, heights):
     """``values`` (L, Y, R, A, P, F) with each geometry rate no larger than three times

@@ -7,8 +7,10 @@ import numpy as np
 
 from .grid import Axis, ContactTable, TableGrid
 
+
 def _pose_axes(grid: TableGrid):
     return (grid.lateral, grid.yaw, grid.roll)
+
 
 def _spline_matrix(count):
     """(count + 2, count + 2) system for the coefficients of a uniform quadratic
@@ -23,6 +25,7 @@ def _spline_matrix(count):
     for i in range(count):
         a[i + 1, i:i + 3] = (0.125, 0.75, 0.125)
     return a
+
 
 def _prefilter(values, grid: TableGrid):
     """Quadratic B-spline coefficients (2, lateral + 2, yaw + 2, roll + 2, approach, P, F)
@@ -40,6 +43,7 @@ def _prefilter(values, grid: TableGrid):
         values = np.moveaxis(solved.reshape(rhs.shape), 0, dim)
     return values
 
+
 def _spline_weights(axis: Axis, x):
     """Start of the 3-coefficient block and the quadratic B-spline weights of ``x``
     (clamped to the axis' span); a one-node axis gives (0, [1])."""
@@ -50,6 +54,7 @@ def _spline_weights(axis: Axis, x):
     t = u - i
     w = jnp.stack([0.5 * (0.5 - t) ** 2, 0.75 - t * t, 0.5 * (0.5 + t) ** 2])
     return i.astype(jnp.int32), w
+
 
 def _pose_weights(table: ContactTable, side_index, lateral, yaw, roll):
     """Nodes (27,) of the 3 x 3 x 3 block of B-spline coefficients around a pose (row
