@@ -132,6 +132,7 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
     speed = np.broadcast_to(np.asarray(samples.get("speed", scenario.speed), np.float64), (n,))
     shift = np.broadcast_to(np.asarray(samples.get("misalignment", scenario.misalignment),
                                        np.float64), (n,))
+    scenario.check_irregularity_covers(track, params, duration, speed=np.max(speed))
     seed, scale, realise = _irregularity_inputs(scenario, track, samples, n)
     values = np.stack([np.asarray(samples[k], np.float64) for k in names], axis=1) if names \
         else np.zeros((n, 0))

@@ -95,14 +95,15 @@ class Scenario:
             raise ValueError(f"{self.source}: [irregularities]: {error}") from error
         return track.with_irregularity(irregularity)
 
-    def check_irregularity_covers(self, track, params, duration) -> None:
-        """ValueError when the run's wheelsets (:func:`jaxrail.simulation.run_span`) go
-        beyond the samples of a measured file's or a spectrum's irregularity (a defect is
-        zero outside its dip)."""
+    def check_irregularity_covers(self, track, params, duration, speed=None) -> None:
+        """ValueError when the run's wheelsets (:func:`jaxrail.simulation.run_span`, at
+        ``speed`` [m/s], default the scenario's) go beyond the samples of a measured
+        file's or a spectrum's irregularity (a defect is zero outside its dip)."""
         spec = self.irregularities
         if spec is None or spec.covers_outside:
             return
-        first, last = run_span(params, self.speed, duration)
+        speed = self.speed if speed is None else float(speed)
+        first, last = run_span(params, speed, duration)
         irregularity = track.irregularity
         start, end = float(irregularity.start), float(irregularity.end)
         if first < start - 1e-9 or last > end + 1e-9:
@@ -110,7 +111,7 @@ class Scenario:
             raise ValueError(
                 f"{self.source}: [irregularities]: the {what} covers s = {start:g} to {end:g} m "
                 f"but the run's wheelsets go from {first:.1f} to {last:.1f} m ({duration:g} s at "
-                f"{self.speed:g} m/s); give a longer file or a shorter run")
+                f"{speed:g} m/s); give a longer file or a shorter run")
 
     def _profile(self, key):
         """The ``[vehicle] key`` profile (key "wheel" or "rail"); ValueError names the

@@ -133,3 +133,20 @@ def test_varying_the_seed_of_a_track_without_irregularities_is_refused(tmp_path,
     assert main(["montecarlo", str(scenario), "--samples", "2",
                  "--vary", "irregularity_seed=0:9"]) == 2
     assert "has no [irregularities] to vary" in capsys.readouterr().err
+
+
+def test_a_study_whose_fastest_sample_outruns_the_file_is_refused(tmp_path, capsys):
+    from jaxrail.cli import main
+
+    csv = tmp_path / "short.csv"
+    assert main(["track", "irregularities", "--spectrum", "german-low", "--length", "8",
+                 "--csv", str(csv)]) == 0
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(SCENARIO.replace('spectrum = "german-high"\nseed = 1',
+                                         f'file = "{csv}"').replace("duration = 0.1",
+                                                                    "duration = 0.2"))
+    # at 10 m/s the run reaches 7 m; at 20 m/s 9 m, past the file's 8 m
+    assert main(["montecarlo", str(scenario), "--samples", "2", "--vary", "speed=10:20",
+                 "--design", "grid"]) == 2
+    assert "covers s = 0 to 8 m but the run's wheelsets go from 5.0 to 9.0 m" in (
+        capsys.readouterr().err)
