@@ -20,7 +20,7 @@ from .._files import cache_root, write_atomically
 from .search import SearchConfig
 from .table import FIELDS, ContactTable, TableGrid, build_contact_table
 
-TABLE_VERSION = 12  # bump when the table's content changes for the same inputs
+TABLE_VERSION = 13  # bump when the table's content changes for the same inputs
 
 
 def cache_folder() -> Path:

@@ -15,7 +15,7 @@ from jaxrail.profiles import s1002, uic60
 from jaxrail.profiles.measures import rail_offset
 from jaxrail.track import straight_track
 
-# the default grid's lateral, roll and approach axes; no yaw
+# the default grid's lateral and approach axes, roll nodes 5 mrad apart; no yaw
 GRID = TableGrid(lateral=Axis.span(-0.016, 0.016, 1.0e-4), yaw=Axis.span(0.0, 0.0, 1.0),
                  roll=Axis.span(-0.015, 0.015, 0.005))
 DEPTH = 6.0e-5  # [m] each wheel pressed into its rail: inside the table's approach axis

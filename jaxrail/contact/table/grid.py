@@ -48,14 +48,14 @@ class TableGrid(eqx.Module):
     approach axis in the square root of the deepest patch's depth [m^0.5] (the search
     runs at the depths ``approach.nodes ** 2``: denser where a conformal patch's
     contact point moves fastest with the depth, near first contact). Conformal contact
-    is sensitive to roll (on UIC60 1:20 the S1002 contact point moves up to 1.5 mm per
-    mrad): half-way between the default roll nodes the table is up to 0.34 mm (1:20)
-    and 0.054 mm (1:40) off the search, with a 2.5 mrad step 0.021 and 0.003 mm
-    (docs/contact-table.md)."""
+    is sensitive to roll: on UIC60 1:20 the S1002 contact point moves up to 1.5 mm per
+    mrad, and on 1:40 the tread's twin patches are born and die within 1-4.5 mrad of
+    roll, which irregular track's cross level reaches; the default 1 mrad roll step
+    follows them (docs/contact-table.md)."""
 
     lateral: Axis = Axis.span(-0.016, 0.016, 1.0e-4)
     yaw: Axis = Axis.span(-0.01, 0.01, 0.005)
-    roll: Axis = Axis.span(-0.015, 0.015, 0.005)
+    roll: Axis = Axis.span(-0.008, 0.008, 0.001)
     approach: Axis = Axis.span(2.0e-3, 1.5e-2, 2.6e-3)
 
     @property

@@ -20,17 +20,22 @@ _MATCH_LIMIT = 1.0  # [m] between levels and yaw or roll nodes: pair as many as 
 
 
 def _distance(a, b):
-    """How far apart two patches are [m], each given as (wheel coordinate [m], depth [m],
-    depth slope): their wheel coordinates, depths (ten times: twin maxima sharing a run
-    are close on the wheel but not in depth) and slopes (a millimetre per unit). Depths,
-    not depth offsets: an offset moves with the wheel's height, which differs from node
-    to node (by tenths of a millimetre per node in flange contact)."""
-    return abs(a[0] - b[0]) + 10.0 * abs(a[1] - b[1]) + 1.0e-3 * abs(a[2] - b[2])
+    """How far apart two patches are [m], each given as (contact point [m], deepest
+    point [m] on the wheel, depth [m], depth slope) (:func:`_key`): their contact
+    points; their deepest points, half-weighted (twin maxima sharing one wide
+    interpenetration have nearly the same contact point, its centre, but deepest
+    points far apart, and which twin survives where the other dies is told by them);
+    their depths, ten times; and their slopes (a millimetre per unit). Depths, not
+    depth offsets: an offset moves with the wheel's height, which differs from node to
+    node (by tenths of a millimetre per node in flange contact)."""
+    return (abs(a[0] - b[0]) + 0.5 * abs(a[1] - b[1]) + 10.0 * abs(a[2] - b[2])
+            + 1.0e-3 * abs(a[3] - b[3]))
 
 
 def _key(value, depth):
-    """(wheel coordinate, depth, depth slope) of a patch's values (F + 1,) and depth [m]."""
-    return np.array([value[_WHERE], depth, value[1]])
+    """(contact point, deepest point, depth, depth slope) of a patch's values
+    (F + 1,) and depth [m]."""
+    return np.array([value[_WHERE], value[_VALUES.start], depth, value[1]])
 
 
 def _pair(old, new, cost, limit):
@@ -58,9 +63,8 @@ def _track_line(found, values, depth, surfaces, heights):
     patches tracked along the lateral axis (:func:`_pair`, each track's next wheel
     coordinate, depth and slope also predicted from its last two nodes: on a conformal
     tread patches move several times their spacing per millimetre of shift), each
-    surface's slots assigned in order of birth; empty slots continue the nearest value of
-    their track, its depth (at each node's own ``heights`` (L,) [m]: the wheel's height
-    changes from node to node) falling off as :func:`_fall` says."""
+    surface's slots assigned in order of birth; empty slots continue their nearest patch
+    (:func:`_continue_empty`, at each node's wheel height ``heights`` (L,) [m])."""
     n, p, _ = values.shape
     out = np.zeros_like(values)
     owner = np.full((n, p), -1)  # track id per node and slot
@@ -106,32 +110,50 @@ def _track_line(found, values, depth, surfaces, heights):
             owner[i, free[0]] = len(tracks) - 1
             out[i, free[0]] = values[i, k]
             held[i, free[0]] = depth[i, k]
-    clear = np.zeros(values.shape[-1])
-    clear[0] = -_CLEAR
-    for j in range(p):
+    out[:, np.all(owner < 0, axis=0), 0] = -_CLEAR  # slots that never hold a patch
+    return _continue_empty(out, owner, heights), owner >= 0
+
+
+def _continue_empty(values, owner, heights):
+    """``values`` (L, P, F) of one lateral line with each slot's entries where it holds
+    no patch (``owner`` (L, P): an id per patch, -1 for none) continued from the nearest
+    node where it does: that patch's geometry, and its depth (at each node's own
+    ``heights`` (L,) [m]: the wheel's height changes from node to node) falling off as
+    :func:`_fall` says, so that the slot's depth along the line has no kink for the
+    spline to ring at where a patch is born or dies (a birth from a shoulder starts at
+    zero depth). A slot that holds no patch anywhere on the line is left as it is."""
+    out = values.copy()
+    for j in range(values.shape[1]):
         have = np.flatnonzero(owner[:, j] >= 0)
         if have.size == 0:
-            out[:, j] = clear
             continue
+        depth = values[:, j, 0] - values[:, j, 1] * heights
         for i in np.flatnonzero(owner[:, j] < 0):
             near = have[np.argmin(np.abs(have - i))]
-            out[i, j] = out[near, j]
-            fall = min(_CLEAR, _fall(held[:, j], owner[:, j], near, i) * abs(i - near))
-            out[i, j, 0] += out[i, j, 1] * (heights[i] - heights[near]) - fall
-    return out, owner >= 0
+            inner = near - 1 if i > near else near + 1
+            trend = 0.0
+            if 0 <= inner < len(depth) and owner[inner, j] == owner[near, j]:
+                trend = depth[inner] - depth[near]
+            fall = min(_CLEAR, _fall(trend, depth[near]) * abs(i - near))
+            out[i, j] = values[near, j]
+            out[i, j, 0] += values[near, j, 1] * (heights[i] - heights[near]) - fall
+    return out
 
 
-def _fall(held, owner, near, i):
-    """How fast [m per node] a slot's depth falls from ``near``, the last node whose
-    patch it held (``held``: the depths), toward ``i``: the patch's own trend over the
-    node before ``near`` when the same patch was there (a continued line has no kink for
-    the spline to ring at) between ``_RAMP_MIN`` and ``_RAMP``, and at least its depth at
-    ``near`` (a gone patch is clear of the rail from the next node on)."""
-    inner = near - 1 if i > near else near + 1
-    trend = 0.0
-    if 0 <= inner < len(held) and owner[inner] == owner[near]:
-        trend = held[inner] - held[near]
-    return max(float(np.clip(trend, _RAMP_MIN, _RAMP)), float(held[near]))
+def _runs(owned):
+    """An id per run of consecutive nodes (axis 0) where a slot holds a patch, -1
+    elsewhere: (L, P) from ``owned`` (L, P)."""
+    starts = owned & ~np.concatenate([np.zeros_like(owned[:1]), owned[:-1]])
+    return np.where(owned, np.cumsum(starts, axis=0), -1)
+
+
+def _fall(trend, depth):
+    """How fast [m per node] a slot's depth falls beyond the last node whose patch it
+    held, of ``depth`` [m] there: the patch's own ``trend`` [m per node] toward that
+    node (a continued line has no kink for the spline to ring at) between ``_RAMP_MIN``
+    and ``_RAMP``, and at least ``depth`` (a gone patch is clear of the rail from the
+    next node on)."""
+    return max(float(np.clip(trend, _RAMP_MIN, _RAMP)), float(depth))
 
 
 def _match(found, values, depth, reference, owned, surfaces, rigid, height, reference_height):
@@ -179,7 +201,9 @@ def _assign_slots(found, values, depth, heights, surfaces):
     """Slot-consistent values (L, Y, R, A, P, F) of a whole grid (lateral, yaw, roll,
     approach): patches tracked along the lateral axis on the central yaw and roll line
     at the deepest approach, then every other node matched to its neighbour toward that
-    line (shallower levels to the deeper one, then outward in yaw, then in roll)."""
+    line (shallower levels to the deeper one, then outward in yaw, then in roll); last,
+    on every lateral line, the empty slots continued from their nearest patch
+    (:func:`_continue_empty`)."""
     n_lat, n_yaw, n_roll, n_app = found.shape[:4]
     out = np.empty_like(values)
     owned = np.zeros(found.shape, dtype=bool)
@@ -207,6 +231,13 @@ def _assign_slots(found, values, depth, heights, surfaces):
             for j in range(n_yaw):
                 for m in range(n_app):
                     match(i, j, k, m, (j, toward, m), False)
+    # every other line's empty slots continued along the lateral axis as the central one's
+    for j in range(n_yaw):
+        for k in range(n_roll):
+            for m in range(n_app):
+                if (j, k, m) != (jc, kc, deep):
+                    out[:, j, k, m] = _continue_empty(out[:, j, k, m], _runs(owned[:, j, k, m]),
+                                                      heights[:, j, k, m])
     return out
 
 
