@@ -10,3 +10,24 @@ import jax  # noqa: E402
 
 # Physics is float64 (docs/design.md §8); tests run with it on, as the CLI does.
 jax.config.update("jax_enable_x64", True)
+
+# The slowest test files (measured with --durations=0), collected first: pytest-xdist's
+# --dist loadfile hands files to the two workers in collection order, so these start at
+# once and the many short files fill in around them, instead of one long file starting
+# last while the other worker idles.
+_SLOWEST_FIRST = (
+    "tests/vehicles/test_imex_trailer.py",
+    "tests/contact/test_table.py",
+    "tests/vehicles/test_irregular_track.py",
+    "tests/montecarlo/test_batch.py",
+    "tests/vehicles/test_trailer.py",
+    "tests/montecarlo/test_distributed.py",
+    "tests/test_progress.py",
+    "tests/vehicles/test_klingel.py",
+    "tests/montecarlo/test_resume.py",
+)
+
+
+def pytest_collection_modifyitems(items):
+    rank = {path: k for k, path in enumerate(_SLOWEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
