@@ -25,6 +25,7 @@ Kinds and deformation coordinates (points and axes in the frames of their bodies
 """
 
 import dataclasses
+import typing
 from typing import ClassVar
 
 import equinox as eqx
@@ -34,7 +35,8 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import quaternion as qt
-from .joints import body_selector, ground_extended, place_bodies, select_bodies
+from ._values import checked_vector, float64_array
+from .joints import _check_frame, body_selector, ground_extended, place_bodies, select_bodies
 
 
 def _tangent(p, g_p):
@@ -234,23 +236,78 @@ def _bump_potential(s, e):
     return 0.5 * e.stiffness * jnp.sum(jnp.maximum(s - e.clearance, 0.0) ** 2)
 
 
-# kind -> (coordinates, law, potential)
+def _points(specs):
+    return dict(point_i=float64_array([s.point_i for s in specs]),
+                point_j=float64_array([s.point_j for s in specs]))
+
+
+def _spring_params(specs, what):
+    return SpringDamperParams(
+        **_points(specs),
+        stiffness=float64_array([s.stiffness for s in specs]),
+        damping=float64_array([s.damping for s in specs]),
+        free_length=float64_array([s.free_length for s in specs]),
+    )
+
+
+def _bushing_params(specs, what):
+    def frame(f, side):
+        return np.eye(3) if f is None else _check_frame(f, f"{what} {side}")
+
+    def six(values, name):
+        return float64_array([checked_vector(v, (6,), f"{what} {name}") for v in values])
+
+    return BushingParams(
+        **_points(specs),
+        frame_i=float64_array([frame(s.frame_i, "frame_i") for s in specs]),
+        frame_j=float64_array([frame(s.frame_j, "frame_j") for s in specs]),
+        stiffness=six([s.stiffness for s in specs], "stiffness"),
+        damping=six([s.damping for s in specs], "damping"),
+        preload=six([s.preload for s in specs], "preload"),
+    )
+
+
+def _bump_params(specs, what):
+    axes = [checked_vector(s.axis_i, (3,), f"{what} axis_i") for s in specs]
+    if any(np.linalg.norm(a) == 0.0 for a in axes):
+        raise ValueError(f"{what} axis_i must be non-zero")
+    return BumpStopParams(
+        **_points(specs),
+        axis_i=float64_array(axes),
+        clearance=float64_array([s.clearance for s in specs]),
+        stiffness=float64_array([s.stiffness for s in specs]),
+        damping=float64_array([s.damping for s in specs]),
+    )
+
+
+class ForceKind(typing.NamedTuple):
+    """One kind of force element: its deformation coordinates ``s(q_i, q_j, e)``, its
+    law ``F(s, sdot, e)``, its stored energy ``V(s, e)`` [J] and ``params(specs,
+    what)``, which checks the kind's build-time descriptions and makes its traced
+    parameters (leading axis: the elements)."""
+
+    coordinates: typing.Callable
+    law: typing.Callable
+    potential: typing.Callable
+    params: typing.Callable
+
+
 FORCE_KINDS = {
-    "spring_damper": (_spring_coords, _spring_law, _spring_potential),
-    "bushing": (_bushing_coords, _bushing_law, _bushing_potential),
-    "bump_stop": (_bump_coords, _bump_law, _bump_potential),
+    "spring_damper": ForceKind(_spring_coords, _spring_law, _spring_potential, _spring_params),
+    "bushing": ForceKind(_bushing_coords, _bushing_law, _bushing_potential, _bushing_params),
+    "bump_stop": ForceKind(_bump_coords, _bump_law, _bump_potential, _bump_params),
 }
 
 
 def element_deformation(kind: str, qi, qj, e) -> Array:
     """Deformation coordinates s of one element of `kind` (see module docstring)."""
-    return FORCE_KINDS[kind][0](qi, qj, e)
+    return FORCE_KINDS[kind].coordinates(qi, qj, e)
 
 
 def _one_element(kind, qi, qj, vi, vj, e):
     """Generalized forces (g_i (7,), g_j (7,)) of one element: -(ds/dq)^T F(s, sdot),
     sdot and the transpose product by forward and reverse AD of s(q_i, q_j)."""
-    coords, law, _ = FORCE_KINDS[kind]
+    coords, law = FORCE_KINDS[kind].coordinates, FORCE_KINDS[kind].law
 
     def s_of(qi, qj):
         return coords(qi, qj, e)
@@ -284,7 +341,7 @@ def element_forces(kind: str, body_i, body_j, e, q, qdot) -> Float[Array, " 7n"]
 def element_potential(kind: str, body_i, body_j, e, q) -> Float[Array, ""]:
     """Summed stored energy [J] of the k elements of one kind (dampers excluded)."""
     n = q.shape[0] // 7
-    coords, _, potential = FORCE_KINDS[kind]
+    coords, potential = FORCE_KINDS[kind].coordinates, FORCE_KINDS[kind].potential
     q_ext = ground_extended(q.reshape(n, 7))
     v = jax.vmap(lambda a, b, p: potential(coords(a, b, p), p))(
         select_bodies(body_selector(body_i, n), q_ext),

@@ -34,6 +34,7 @@ from . import bodies as bd
 from . import forces as fc
 from . import joints as jt
 from . import quaternion as qt
+from ._values import checked_vector, float64_array
 
 
 @dataclasses.dataclass(frozen=True)
@@ -88,17 +89,6 @@ class SystemParams(eqx.Module):
     baumgarte_beta: Float[Array, ""]
 
 
-def _f64(x):
-    return jnp.asarray(np.asarray(x, dtype=np.float64), dtype=jnp.float64)
-
-
-def _vector(x, shape, what):
-    a = np.asarray(x, dtype=np.float64)
-    if a.shape != shape or not np.all(np.isfinite(a)):
-        raise ValueError(f"{what} must be finite with shape {shape}, got {x!r}")
-    return a
-
-
 def _body_index(ref, names, what):
     if isinstance(ref, str):
         if ref == "ground":
@@ -117,53 +107,18 @@ def _resolve(element, names, what):
     bj = _body_index(element.body_j, names, f"{what} body_j")
     if bi == bj:
         raise ValueError(f"{what}: body_i and body_j must differ, both are {bi}")
-    _vector(element.point_i, (3,), f"{what} point_i")
-    _vector(element.point_j, (3,), f"{what} point_j")
+    checked_vector(element.point_i, (3,), f"{what} point_i")
+    checked_vector(element.point_j, (3,), f"{what} point_j")
     return bi, bj
 
 
 def _joint_params(specs):
     frames = [s.frames() for s in specs]
     return jt.JointParams(
-        point_i=_f64([s.point_i for s in specs]),
-        point_j=_f64([s.point_j for s in specs]),
-        frame_i=_f64([f[0] for f in frames]),
-        frame_j=_f64([f[1] for f in frames]),
-    )
-
-
-def _force_params(kind, specs, what):
-    pts = dict(point_i=_f64([s.point_i for s in specs]),
-               point_j=_f64([s.point_j for s in specs]))
-    if kind == "spring_damper":
-        return fc.SpringDamperParams(
-            **pts,
-            stiffness=_f64([s.stiffness for s in specs]),
-            damping=_f64([s.damping for s in specs]),
-            free_length=_f64([s.free_length for s in specs]),
-        )
-    if kind == "bushing":
-        def frame(f, side):
-            return np.eye(3) if f is None else jt._check_frame(f, f"{what} {side}")
-
-        return fc.BushingParams(
-            **pts,
-            frame_i=_f64([frame(s.frame_i, "frame_i") for s in specs]),
-            frame_j=_f64([frame(s.frame_j, "frame_j") for s in specs]),
-            stiffness=_f64([_vector(s.stiffness, (6,), f"{what} stiffness")
-                            for s in specs]),
-            damping=_f64([_vector(s.damping, (6,), f"{what} damping") for s in specs]),
-            preload=_f64([_vector(s.preload, (6,), f"{what} preload") for s in specs]),
-        )
-    axes = [_vector(s.axis_i, (3,), f"{what} axis_i") for s in specs]
-    if any(np.linalg.norm(a) == 0.0 for a in axes):
-        raise ValueError(f"{what} axis_i must be non-zero")
-    return fc.BumpStopParams(
-        **pts,
-        axis_i=_f64(axes),
-        clearance=_f64([s.clearance for s in specs]),
-        stiffness=_f64([s.stiffness for s in specs]),
-        damping=_f64([s.damping for s in specs]),
+        point_i=float64_array([s.point_i for s in specs]),
+        point_j=float64_array([s.point_j for s in specs]),
+        frame_i=float64_array([f[0] for f in frames]),
+        frame_j=float64_array([f[1] for f in frames]),
     )
 
 
@@ -171,7 +126,8 @@ def _groups(elements, kinds, names, what):
     groups, by_kind = [], {}
     for e in elements:
         if getattr(e, "kind", None) not in kinds:
-            raise ValueError(f"{what} must be one of {sorted(kinds)}, got {e!r}")
+            raise ValueError(f"{what} kind must be one of {sorted(kinds)}, got "
+                             f"{getattr(e, 'kind', None)!r} ({e!r})")
     for kind in kinds:
         specs = [e for e in elements if e.kind == kind]
         if not specs:
@@ -203,19 +159,19 @@ def build_system(bodies, joints=(), forces=(), gravity=(0.0, 0.0, 0.0),
     if len(set(names)) != len(names) or "ground" in names:
         raise ValueError(f"bodies must have unique names other than 'ground': {names}")
     inertia = [b.inertia_tensor() for b in bodies]
-    alpha, beta = _vector(baumgarte, (2,), "baumgarte")
+    alpha, beta = checked_vector(baumgarte, (2,), "baumgarte")
     if alpha < 0.0 or beta < 0.0:
         raise ValueError(f"baumgarte gains must be >= 0, got {baumgarte}")
     joint_groups, joint_specs = _groups(tuple(joints), jt.JOINT_KINDS, names, "joint")
     force_groups, force_specs = _groups(tuple(forces), fc.FORCE_KINDS, names, "force")
     system = System(len(bodies), names, joint_groups, force_groups)
     params = SystemParams(
-        bodies=bd.BodyParams(_f64([b.mass for b in bodies]), _f64(inertia)),
+        bodies=bd.BodyParams(float64_array([b.mass for b in bodies]), float64_array(inertia)),
         joints={k: _joint_params(s) for k, s in joint_specs.items()},
-        forces={k: _force_params(k, s, f"force {k}") for k, s in force_specs.items()},
-        gravity=_f64(_vector(gravity, (3,), "gravity")),
-        baumgarte_alpha=_f64(alpha),
-        baumgarte_beta=_f64(beta),
+        forces={k: fc.FORCE_KINDS[k].params(s, f"force {k}") for k, s in force_specs.items()},
+        gravity=float64_array(checked_vector(gravity, (3,), "gravity")),
+        baumgarte_alpha=float64_array(alpha),
+        baumgarte_beta=float64_array(beta),
     )
     return system, params
 

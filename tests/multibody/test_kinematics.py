@@ -3,6 +3,9 @@ references: jax.jacfwd of Phi, finite differences, virtual work and power, Euler
 equations. Kernels run under jit and vmap; gradients are checked with finite
 differences."""
 
+import dataclasses
+from typing import ClassVar
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -378,6 +381,28 @@ BODY = mb.RigidBody("a", 1.0, (1.0, 1.0, 1.0))
 def test_bad_structure_raises_value_error(kwargs, message):
     with pytest.raises(ValueError, match=message):
         mb.build_system(**kwargs)
+
+
+def test_an_unknown_force_kind_is_named_not_built_as_another():
+    """A force description whose kind is not in FORCE_KINDS (a torsion bar with the
+    fields of a bump stop) is refused with its kind named; each known kind builds its
+    own parameters."""
+    @dataclasses.dataclass(frozen=True)
+    class TorsionBar(mb.BumpStop):
+        kind: ClassVar[str] = "torsion_bar"
+
+    bar = TorsionBar("a", -1, (0, 0, 0), (0, 0, 0), axis_i=(0, 0, 1), clearance=0.0,
+                     stiffness=1.0)
+    with pytest.raises(ValueError, match="force kind must be one of .*got .torsion_bar."):
+        mb.build_system([BODY], forces=[bar])
+    elements = [mb.SpringDamper("a", -1, (0, 0, 0), (0, 0, 1), 1.0, 1.0),
+                mb.Bushing("a", -1, (0, 0, 0), (0, 0, 0), stiffness=(1.0,) * 6),
+                mb.BumpStop("a", -1, (0, 0, 0), (0, 0, 0), axis_i=(0, 0, 1), clearance=0.0,
+                            stiffness=1.0)]
+    _, params = mb.build_system([BODY], forces=elements)
+    built = {kind: type(p).__name__ for kind, p in params.forces.items()}
+    assert built == {"spring_damper": "SpringDamperParams", "bushing": "BushingParams",
+                     "bump_stop": "BumpStopParams"}
 
 
 def test_find_names():

@@ -1,0 +1,17 @@
+"""Build-time checks and conversions of the numbers in multibody descriptions."""
+
+import jax.numpy as jnp
+import numpy as np
+
+
+def float64_array(x):
+    """``x`` as a float64 JAX array."""
+    return jnp.asarray(np.asarray(x, dtype=np.float64), dtype=jnp.float64)
+
+
+def checked_vector(x, shape, what):
+    """``x`` as a float64 numpy array of ``shape``, or a ValueError naming ``what``."""
+    a = np.asarray(x, dtype=np.float64)
+    if a.shape != shape or not np.all(np.isfinite(a)):
+        raise ValueError(f"{what} must be finite with shape {shape}, got {x!r}")
+    return a
