@@ -148,6 +148,7 @@ def summarize(result, friction=0.4, flange_angle_threshold=0.6) -> dict:
     ratio = derailment_ratio(result)
     n_valid = int(np.sum(valid))
     any_valid = n_valid > 0
+    deflection = np.abs(np.asarray(result.rail_deflection, dtype=np.float64))  # (T, W, 2, 2)
     wheels = []
     for ws in range(active.shape[1]):
         for side in range(2):
@@ -161,6 +162,9 @@ def summarize(result, friction=0.4, flange_angle_threshold=0.6) -> dict:
                 "tread_and_flange_intervals_s": _runs(t, tread_and_flange[:, ws, side]),
                 "flange_contact_fraction": (float(np.sum(flange[:, ws, side])) / n_valid
                                             if any_valid else None),
+                "max_rail_deflection_lateral_m": _masked_max(deflection[:, ws, side, 0], valid),
+                "max_rail_deflection_vertical_m": _masked_max(deflection[:, ws, side, 1],
+                                                              valid),
             })
     lateral = np.abs(np.asarray(result.wheelset_lateral, dtype=np.float64))
     wheelsets = [{"wheelset": ws + 1,
@@ -277,6 +281,13 @@ def _datasets(result, body_names):
              "level (positive up), cross level (left rail over right) and gauge deviation "
              "(positive wider), zeros on an ideal track (docs/track.md); axes: time, "
              "wheelset (index 0 = leading), channel"), "time, wheelset, channel"),
+        "track/rail_deflection": (
+            floats(result.rail_deflection), "m",
+            ("the deflection of the rails under each wheelset on a flexible track: lateral "
+             "along the canted track frame's n (positive left), vertical along its b "
+             "(positive up), from the unloaded rail; zeros on rigid rails (docs/track.md); "
+             "axes: time, wheelset (index 0 = leading), rail (left, right), direction "
+             "(lateral, vertical)"), "time, wheelset, rail, direction"),
         "bodies/q": (q.reshape(len(t), n, 7), "m (x, y, z); 1 (e0, e1, e2, e3)",
                      "body coordinates; axes: time, body, component. " + _BODY_CONVENTION,
                      "time, body, component"),

@@ -149,6 +149,10 @@ class SimulationResult(eqx.Module):
         irregularity (T, W, 4): the track's irregularity channels at each wheelset
             (alignment, vertical level, cross level, gauge; :mod:`jaxrail.track.irregularity`)
             [m], zeros on an ideal track;
+        rail_deflection (T, W, 2, 2): on a flexible track, the deflection of the rails
+            under each wheelset (left, right; lateral along the canted track frame's
+            ``n``, vertical along its ``b``) [m] (:mod:`jaxrail.track.flexible`),
+            zeros on rigid rails;
         wheels: :class:`WheelOutputs`;
         constraint_violation (T,): max |Phi| over the joint rows;
         result: diffrax's result code; derailed: the derailment event fired;
@@ -164,6 +168,7 @@ class SimulationResult(eqx.Module):
     wheelset_vertical: jax.Array
     wheelset_yaw: jax.Array
     irregularity: jax.Array
+    rail_deflection: jax.Array
     wheels: WheelOutputs
     constraint_violation: jax.Array
     result: jax.Array
@@ -215,7 +220,7 @@ def _wheelset_track_coordinates(vehicle, track, q, qdot):
 def _stop_events(vehicle, track, limits, rest_height):
     """The terminating diffrax Event of a run: (derailed, non-finite state)."""
     def derailed(t, y, args, **kwargs):
-        q, qdot = y
+        q, qdot = y[0], y[1]
         lateral, _, _, heights, irregularity = _wheelset_track_coordinates(vehicle, track, q,
                                                                            qdot)
         lifted = jnp.any(heights - rest_height > limits.lift)
@@ -223,7 +228,7 @@ def _stop_events(vehicle, track, limits, rest_height):
         return lifted | off
 
     def not_finite(t, y, args, **kwargs):
-        return ~jnp.all(jnp.isfinite(y[0])) | ~jnp.all(jnp.isfinite(y[1]))
+        return ~jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(y)]))
 
     return diffrax.Event((derailed, not_finite))
 
@@ -240,9 +245,10 @@ def _starts_derailed(limits, lateral0, irregularity0, misalignment):
             | (unknown & (jnp.abs(misalignment) > limits.lateral)))
 
 
-def _wheel_outputs(vehicle, params, track, q, qdot, model):
-    """WheelOutputs at one state (leading shape (W, 2, P))."""
-    _, _, patches, forces = contact_loads(vehicle, params, track, q, qdot, model)
+def _wheel_outputs(vehicle, params, track, q, qdot, rails, model):
+    """WheelOutputs at one state (leading shape (W, 2, P)); ``rails``: the flexible
+    track's ``(w, wdot)`` (W, 2, 2), or None."""
+    _, _, patches, forces = contact_loads(vehicle, params, track, q, qdot, model, rails)
     position, _, _, _ = wheelset_states(vehicle, q, qdot)
     frames = jax.vmap(lambda r: track_frame(track, to_track_coordinates(track, r)[0]))(position)
     side = jnp.array([1.0, -1.0])[None, :]
@@ -256,9 +262,10 @@ def _wheel_outputs(vehicle, params, track, q, qdot, model):
 
 
 def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t0, t1, ts, dt0,
-               options, limits, solver, adjoint):
+               options, limits, solver, adjoint, rails0=None):
     """diffrax's Solution of eq. (19) from (q0, qdot0) at t0 to t1 [s], saved at ``ts``,
-    stopped by the derailment event; ``dt0`` [s]: the first step."""
+    stopped by the derailment event; ``dt0`` [s]: the first step; ``rails0``: a
+    flexible track's rails ``(w, wdot)`` at t0, integrated with the bodies."""
     controller, _ = options.controller()
     return simulate_system(
         vehicle.system, params.system, q0, qdot0, t1, t0=t0, dt0=dt0,
@@ -266,22 +273,26 @@ def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t0, t1, t
         solver=options.solver() if solver is None else solver,
         external=loads, max_steps=options.max_steps, adjoint=adjoint, throw=False,
         stepsize_controller=controller,
-        event=_stop_events(vehicle, track, limits, rest_heights))
+        event=_stop_events(vehicle, track, limits, rest_heights), states0=rails0)
 
 
-def _results(vehicle, params, track, model, q0, qdot0, ts, q, qdot, result, derailed,
-             steps, accepted_steps, rejected_steps):
+def _results(vehicle, params, track, model, q0, qdot0, rails0, ts, q, qdot, rails, result,
+             derailed, steps, accepted_steps, rejected_steps):
     """SimulationResult from the states at the output times (non-finite rows: not
-    reached), without host timings."""
+    reached), without host timings. ``rails0``, ``rails``: a flexible track's rails
+    ``(w, wdot)`` at the start (W, 2, 2) and at the output times (T, W, 2, 2), or None."""
     _, rest_vertical, _, _, _ = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
     valid = jnp.all(jnp.isfinite(q), axis=1) & jnp.all(jnp.isfinite(qdot), axis=1)
     # Outputs after an early stop are recomputed at the initial state and masked.
-    q_safe = jnp.where(valid[:, None], q, q0)
-    qdot_safe = jnp.where(valid[:, None], qdot, qdot0)
+    safe = lambda x, x0: jnp.where(valid.reshape((-1,) + (1,) * (x.ndim - 1)), x, x0)  # noqa: E731
+    q_safe, qdot_safe = safe(q, q0), safe(qdot, qdot0)
+    rails_safe = None if rails is None else jax.tree.map(safe, rails, rails0)
     lateral, vertical, yaw, _, irregularity = jax.vmap(
         lambda a, b: _wheelset_track_coordinates(vehicle, track, a, b))(q_safe, qdot_safe)
     wheels = jax.lax.map(lambda y: _wheel_outputs(vehicle, params, track, *y, model),
-                         (q_safe, qdot_safe))
+                         (q_safe, qdot_safe, rails_safe))
+    deflection = (jnp.zeros(lateral.shape + (2, 2), dtype=q.dtype) if rails is None
+                  else rails_safe[0])
     n_norm = vehicle.system.n_bodies
     violation = jax.vmap(lambda a, b: jnp.max(jnp.abs(
         constraints(vehicle.system, params.system, a, b)[0][n_norm:]), initial=0.0))(
@@ -292,17 +303,58 @@ def _results(vehicle, params, track, model, q0, qdot0, ts, q, qdot, result, dera
     return SimulationResult(
         t=ts, q=q, qdot=qdot, valid=valid, wheelset_lateral=nan(lateral),
         wheelset_vertical=nan(vertical - rest_vertical), wheelset_yaw=nan(yaw),
-        irregularity=nan(irregularity), wheels=wheels, constraint_violation=nan(violation),
+        irregularity=nan(irregularity), rail_deflection=nan(deflection), wheels=wheels,
+        constraint_violation=nan(violation),
         result=result, derailed=jnp.asarray(derailed), steps=steps, accepted_steps=accepted_steps,
         rejected_steps=rejected_steps, wall_time_s=jnp.asarray(jnp.nan),
         compile_time_s=jnp.asarray(jnp.nan))
 
 
 def _start(vehicle, params, track, speed, misalignment, s0, initial, model):
-    """(q0, qdot0): ``initial``, or the static equilibrium."""
+    """(q0, qdot0, rails0): ``initial``, or the static equilibrium; ``rails0``: a
+    flexible track's rails ``(w, wdot)`` (W, 2, 2) [m, m/s], None on rigid rails."""
     if initial is None:
-        return initial_state(vehicle, params, track, speed, misalignment, s0, model)
-    return tuple(jnp.asarray(x, dtype=jnp.float64) for x in initial)
+        initial = initial_state(vehicle, params, track, speed, misalignment, s0, model)
+    return _as_state(track, initial)
+
+
+def _as_state(track, initial):
+    """``initial`` = (q0, qdot0[, rails0]) as float64 arrays, checked against the track:
+    a flexible track needs its rails' state, a rigid one has none."""
+    initial = tuple(initial)
+    if len(initial) == 3 and initial[2] is None:
+        initial = initial[:2]
+    initial = jax.tree.map(lambda x: jnp.asarray(x, dtype=jnp.float64), initial)
+    flexible = getattr(track, "support", None) is not None
+    if len(initial) != (3 if flexible else 2):
+        raise ValueError(f"initial must be (q0, qdot0{', rails0' if flexible else ''}) on "
+                         f"{'a flexible track' if flexible else 'rigid rails'}, got "
+                         f"{len(initial)} items")
+    return initial if flexible else initial + (None,)
+
+
+def _solve_states(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignment,
+                  s0, options, limits, solver, adjoint, initial, contact_model):
+    """The integration of :func:`solve`: ``(q0, qdot0, rails0)`` and the arguments of
+    :func:`_results` after them (output times, states, result code, derailed, step
+    counts)."""
+    limits = DerailmentLimits() if limits is None else limits
+    loads = VehicleLoads(vehicle, params, track, resolve_contact_model(contact_model))
+    q0, qdot0, rails0 = _start(vehicle, params, track, speed, misalignment, s0, initial,
+                               loads.model)
+    lateral0, _, _, rest_heights, irregularity0 = _wheelset_track_coordinates(vehicle, track,
+                                                                              q0, qdot0)
+    ts = jnp.linspace(0.0, t1, options.n_outputs)
+    sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
+                     options.controller()[1], options, limits, solver, adjoint, rails0)
+    q, qdot, rails = sol.ys[0], sol.ys[1], (None if rails0 is None else sol.ys[2])
+    # a state that only turned non-finite is not derailed: diffrax's event_occurred
+    # result makes the status "failed"
+    derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, irregularity0,
+                                                    misalignment)
+    return ((q0, qdot0, rails0), (sol.ts, q, qdot, rails, sol.result, derailed,
+                                  sol.stats["num_steps"], sol.stats["num_accepted_steps"],
+                                  sol.stats["num_rejected_steps"]))
 
 
 def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignment=0.0,
@@ -311,41 +363,32 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
           initial=None, contact_model=None):
     """The traceable core of :func:`simulate` (jit, vmap and grad it): returns a
     :class:`SimulationResult` without host timings. ``t1`` [s], ``speed`` [m/s] and
-    ``misalignment`` [m] may be traced. ``initial``: ``(q0, qdot0)`` to start from
-    instead of the static equilibrium (:func:`jaxrail.vehicles.initial_state`); wheel
-    lifts and vertical displacements are measured from the initial state.
-    ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's search).
-    ``options.progress`` is not used here (:func:`simulate` draws the bar). ``limits``:
-    :class:`DerailmentLimits` (default ones)."""
-    limits = DerailmentLimits() if limits is None else limits
-    loads = VehicleLoads(vehicle, params, track, resolve_contact_model(contact_model))
-    q0, qdot0 = _start(vehicle, params, track, speed, misalignment, s0, initial, loads.model)
-    lateral0, _, _, rest_heights, irregularity0 = _wheelset_track_coordinates(vehicle, track,
-                                                                              q0, qdot0)
-    ts = jnp.linspace(0.0, t1, options.n_outputs)
-    sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
-                     options.controller()[1], options, limits, solver, adjoint)
-    q, qdot = sol.ys
-    # a state that only turned non-finite is not derailed: diffrax's event_occurred
-    # result makes the status "failed"
-    derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, irregularity0,
-                                                    misalignment)
-    return _results(vehicle, params, track, loads.model, q0, qdot0, sol.ts, q, qdot,
-                    sol.result, derailed, sol.stats["num_steps"],
-                    sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
+    ``misalignment`` [m] may be traced. ``initial``: ``(q0, qdot0)`` (and on a flexible
+    track the rails' ``(w, wdot)``) to start from instead of the static equilibrium
+    (:func:`jaxrail.vehicles.initial_state`); wheel lifts and vertical displacements
+    are measured from the initial state. ``contact_model``: :mod:`jaxrail.vehicles.loads`
+    (default the paper's search). ``options.progress`` is not used here
+    (:func:`simulate` draws the bar). ``limits``: :class:`DerailmentLimits` (default
+    ones)."""
+    start, outputs = _solve_states(vehicle, params, track, t1, speed, misalignment, s0,
+                                   options, limits, solver, adjoint, initial, contact_model)
+    return _results(vehicle, params, track, resolve_contact_model(contact_model), *start,
+                    *outputs)
 
 
-def _segment(vehicle, params, track, q0, qdot0, rest_heights, started_derailed, t0, t1, ts,
+def _segment(vehicle, params, track, state, rest_heights, started_derailed, t0, t1, ts,
              dt0, options, limits, solver, contact_model):
-    """One segment of a run with a progress bar: from (q0, qdot0) at t0 to t1 [s],
-    saved at ``ts`` (the last one is t1). Returns (q, qdot) at ``ts``, diffrax's result
-    code, whether the run derailed (or ``started_derailed``), and the steps taken,
-    accepted and rejected."""
+    """One segment of a run with a progress bar: from ``state`` = (q0, qdot0, rails0) at
+    t0 to t1 [s], saved at ``ts`` (the last one is t1). Returns the states (q, qdot,
+    rails) at ``ts`` (rails None on rigid rails), diffrax's result code, whether the run
+    derailed (or ``started_derailed``), and the steps taken, accepted and rejected."""
     loads = VehicleLoads(vehicle, params, track, contact_model)
+    q0, qdot0, rails0 = state
     sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t0, t1, ts,
-                     dt0, options, limits, solver, None)
+                     dt0, options, limits, solver, None, rails0)
     derailed = sol.event_mask[0] | started_derailed
-    return (sol.ys, sol.result, derailed, sol.stats["num_steps"],
+    states = (sol.ys[0], sol.ys[1], None if rails0 is None else sol.ys[2])
+    return (states, sol.result, derailed, sol.stats["num_steps"],
             sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
 
 
@@ -394,34 +437,38 @@ def _segment_outputs(n_outputs):
             for i in range(1, n_outputs, per)]
 
 
-def _run_in_segments(timer, vehicle, params, track, t1, q0, qdot0, options, limits,
+def _run_in_segments(timer, vehicle, params, track, t1, initial, options, limits,
                      solver, contact_model, misalignment):
-    """Integrate segment by segment, drawing the progress bar between them; returns the
-    arguments of :func:`_results` after (q0, qdot0)."""
+    """Integrate segment by segment from ``initial`` = (q0, qdot0, rails0), drawing the
+    progress bar between them; returns the arguments of :func:`_results` after
+    ``rails0``."""
     ts = np.linspace(0.0, float(t1), options.n_outputs)
-    q = np.full((options.n_outputs, q0.shape[0]), np.nan)
-    qdot = np.full_like(q, np.nan)
-    q[0], qdot[0] = q0, qdot0
+    leaves, structure = jax.tree.flatten(initial)
+    saved = [np.full((options.n_outputs,) + np.shape(x), np.nan) for x in leaves]
+    for out, x in zip(saved, leaves):
+        out[0] = x
+    q0, qdot0 = initial[0], initial[1]
     lateral0, _, _, rest_heights, irregularity0 = timer.run(_wheelset_track_coordinates,
                                                             vehicle, track, q0, qdot0)
     started = _starts_derailed(limits, lateral0, irregularity0, misalignment)
     static = dict(options=options, limits=limits, solver=solver, contact_model=contact_model)
     result, derailed, counts = diffrax.RESULTS.successful, False, np.zeros(3, dtype=int)
-    t0, dt0, state = 0.0, options.controller()[1], (q0, qdot0)
+    t0, dt0, state = 0.0, options.controller()[1], initial
     run_segment = None
     with SimulatedTimeBar(float(t1)) as bar:
         for indices in _segment_outputs(options.n_outputs):
             t_end = ts[indices[-1]]
-            args = (vehicle, params, track, *state, rest_heights, jnp.asarray(started),
+            args = (vehicle, params, track, state, rest_heights, jnp.asarray(started),
                     jnp.float64(t0),
                     jnp.float64(t_end), jnp.asarray(ts[indices]), jnp.float64(dt0))
             if run_segment is None:
                 run_segment = timer.compile(_segment, *args, **static)
                 bar.restart()
-            (q_seg, qdot_seg), result, derailed, *stats = run_segment(*args, **static)
-            q[indices], qdot[indices] = q_seg, qdot_seg
+            states, result, derailed, *stats = run_segment(*args, **static)
+            for out, x in zip(saved, jax.tree.leaves(states)):
+                out[indices] = x
             counts += np.array([int(x) for x in stats])
-            reached = ts[indices][np.all(np.isfinite(np.asarray(q_seg)), axis=1)]
+            reached = ts[indices][np.all(np.isfinite(np.asarray(states[0])), axis=1)]
             bar.update(float(reached.max(initial=t0)))
             if not bool(result == diffrax.RESULTS.successful) or bool(derailed):
                 break
@@ -430,10 +477,12 @@ def _run_in_segments(timer, vehicle, params, track, t1, q0, qdot0, options, limi
                 break
             if options.fixed_step is None:  # the next segment starts with this one's mean step
                 dt0 = (t_end - t0) / max(int(stats[1]), 1)
-            t0, state, started = t_end, (q_seg[-1], qdot_seg[-1]), False
-    for x in (q, qdot):
-        x[~np.isfinite(x).all(axis=1)] = np.nan
-    return (jnp.asarray(ts), jnp.asarray(q), jnp.asarray(qdot), result, jnp.asarray(derailed),
+            t0, state, started = t_end, jax.tree.map(lambda x: x[-1], states), False
+    reached = np.all([np.isfinite(x).reshape(len(ts), -1).all(axis=1) for x in saved], axis=0)
+    for x in saved:
+        x[~reached] = np.nan
+    q, qdot, rails = jax.tree.unflatten(structure, [jnp.asarray(x) for x in saved])
+    return (jnp.asarray(ts), q, qdot, rails, result, jnp.asarray(derailed),
             *(jnp.asarray(c) for c in counts))
 
 
@@ -493,9 +542,9 @@ def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: f
     if initial is None:
         initial = timer.run(initial_state, vehicle, params, track, speed, misalignment, s0,
                             contact_model)
-    initial = tuple(jnp.asarray(x, dtype=jnp.float64) for x in initial)
+    initial = _as_state(track, initial)
     if options.progress:
-        outputs = _run_in_segments(timer, vehicle, params, track, t1, *initial, options,
+        outputs = _run_in_segments(timer, vehicle, params, track, t1, initial, options,
                                    limits, solver, contact_model, misalignment)
         result = timer.run(_results, vehicle, params, track, contact_model, *initial,
                            *outputs)

@@ -89,6 +89,12 @@ def synthetic_result():
         creep_force_y=floats(-0.05 * normal), creepage_x=floats(np.full(shape, 1e-3)),
         creepage_y=floats(np.full(shape, -2e-3)), spin=floats(np.full(shape, 0.01)),
         lateral_force=floats(lateral_force), vertical_force=floats(vertical_force))
+    # the rails under wheelset 1 on a flexible track: the right one pressed down most at
+    # t7, after the run stopped (not counted), and at t6 before it
+    deflection = np.zeros((T, W, 2, 2))
+    deflection[:, 0, RIGHT, 1] = -7e-4
+    deflection[6, 0, RIGHT, 1], deflection[7, 0, RIGHT, 1] = -9e-4, -2e-3
+    deflection[:, 0, RIGHT, 0] = 3e-5
     q = np.tile(np.array([1.0, 2.0, 3.0, 1.0, 0.0, 0.0, 0.0]), N_BODIES)[None] \
         + np.arange(T)[:, None] * 1e-3
     q[~valid] = np.inf
@@ -97,7 +103,8 @@ def synthetic_result():
     return SimulationResult(
         t=t, q=q, qdot=qdot, valid=valid, wheelset_lateral=floats(lateral),
         wheelset_vertical=floats(np.full((T, W), 1e-5)), wheelset_yaw=floats(np.full((T, W), 2e-4)),
-        irregularity=floats(np.full((T, W, 4), 1e-3)), wheels=wheels, constraint_violation=floats(np.full(T, 1e-9)),
+        irregularity=floats(np.full((T, W, 4), 1e-3)), rail_deflection=floats(deflection),
+        wheels=wheels, constraint_violation=floats(np.full(T, 1e-9)),
         result=diffrax.RESULTS.successful, derailed=np.asarray(True), steps=np.asarray(100),
         accepted_steps=np.asarray(90), rejected_steps=np.asarray(10),
         wall_time_s=np.asarray(2.0), compile_time_s=np.asarray(np.nan))
@@ -169,6 +176,9 @@ def test_maxima_ignore_inactive_slots_and_invalid_times(summary):
     assert left["max_normal_force_N"] == 0.0 and left["max_Y_over_Q"] is None
     assert summary["wheelsets"][0]["max_lateral_displacement_m"] == pytest.approx(7e-3)
     assert summary["wheelsets"][1]["max_lateral_displacement_m"] == pytest.approx(3e-3)
+    assert right["max_rail_deflection_vertical_m"] == pytest.approx(9e-4)  # not t7's 2 mm
+    assert right["max_rail_deflection_lateral_m"] == pytest.approx(3e-5)
+    assert left["max_rail_deflection_vertical_m"] == 0.0  # a rigid rail's
 
 
 def test_schema_keys_and_json(summary, tmp_path):
@@ -178,7 +188,8 @@ def test_schema_keys_and_json(summary, tmp_path):
     for w in summary["wheels"]:
         assert set(w) == {"wheelset", "side", "max_normal_force_N", "max_Y_over_Q",
                           "multi_patch_intervals_s", "tread_and_flange_intervals_s",
-                          "flange_contact_fraction"}
+                          "flange_contact_fraction", "max_rail_deflection_lateral_m",
+                          "max_rail_deflection_vertical_m"}
     assert set(summary["wheelsets"][0]) == {"wheelset", "max_lateral_displacement_m"}
     text = json.dumps(summary, allow_nan=False)  # raises on NaN or numpy types
     assert json.loads(text) == summary
@@ -228,7 +239,7 @@ def test_file_opens_with_h5py_alone_and_has_units_everywhere(results_file):
         "print(len(names), f['contact/normal_force'].attrs['units'], f.attrs['scenario'])\n")
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                          check=True, cwd=os.path.dirname(results_file))
-    assert out.stdout.split() == ["23", "N", "paper-curve"]
+    assert out.stdout.split() == ["24", "N", "paper-curve"]  # 24 datasets
 
 
 def test_layout_units_and_attributes(results_file):

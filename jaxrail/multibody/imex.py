@@ -35,7 +35,7 @@ import jax.numpy as jnp
 import jax.scipy.linalg
 import numpy as np
 
-from .system import acceleration_response, accelerations, project_state, rhs
+from .system import FixedLoads, acceleration_response, accelerations, project_state, rhs
 
 METHODS = {"KenCarp3": 3, "KenCarp4": 4, "KenCarp5": 5}
 
@@ -77,35 +77,66 @@ class StiffJacobian(eqx.Module):
         return b_q + hg * x_v, x_v
 
 
-class _FixedLoads(eqx.Module):
-    """An ``external`` hook that returns loads computed beforehand."""
-
-    forces: jax.Array
-    torques: jax.Array
-
-    def __call__(self, t, q, qdot):
-        return self.forces, self.torques
-
-
-def stiff_jacobian(system, params, t, q, qdot, external):
+def stiff_jacobian(system, params, t, q, qdot, external, states=None):
     """(f(y) = (qdot, qddot), :class:`StiffJacobian`) at y = (q, qdot).
 
     ``external.linearised(t, q, qdot)`` returns ``(forces, torques, bodies, blocks)``:
     the loads as ``external(t, q, qdot)`` does, the indices of the bodies with stiff
     loads (static) and ``blocks`` (k, 7, 14), the derivative of each such body's
     generalized load with respect to its own (q, qdot) (7 + 7 coordinates). The contact
-    is evaluated once for both. Without it, J = 0."""
-    if external is None or not hasattr(external, "linearised"):
-        n7 = q.shape[0]
-        empty = jnp.zeros((n7, 0), dtype=q.dtype)
-        return rhs(t, (q, qdot), (system, params, external)), StiffJacobian((), empty, empty)
-    forces, torques, bodies, blocks = external.linearised(t, q, qdot)
-    qddot, _ = accelerations(system, params, t, q, qdot, _FixedLoads(forces, torques))
-    columns = tuple(7 * b + i for b in bodies for i in range(7))
-    response = acceleration_response(system, params, q, qdot, bodies, blocks)  # (7n, k, 14)
-    a_q = response[:, :, :7].reshape(q.shape[0], -1)
-    a_v = response[:, :, 7:].reshape(q.shape[0], -1)
-    return (qdot, qddot), StiffJacobian(columns, a_q, a_v)
+    is evaluated once for both. Without it, J = 0.
+
+    With further states ``states = (x, xdot)`` (second order, (k, ...) per stiff body,
+    e.g. a flexible track's rails), ``external.linearised(t, q, qdot, states)`` returns
+    ``(forces, torques, states_dot, bodies, blocks, state_rows)``: ``blocks`` (k, 7, 2
+    (7 + r)) and ``state_rows`` (k, r, 2 (7 + r)) the derivatives of each body's load
+    and of its r states' accelerations by its (q, x, qdot, xdot); f and J are then those
+    of the packed state (:func:`_pack`)."""
+    if states is None:
+        if external is None or not hasattr(external, "linearised"):
+            n7 = q.shape[0]
+            empty = jnp.zeros((n7, 0), dtype=q.dtype)
+            return rhs(t, (q, qdot), (system, params, external)), StiffJacobian((), empty, empty)
+        forces, torques, bodies, blocks = external.linearised(t, q, qdot)
+        state_rows = jnp.zeros(blocks.shape[:1] + (0, 14), dtype=q.dtype)
+        f_states = None
+    else:
+        forces, torques, f_states, bodies, blocks, state_rows = external.linearised(
+            t, q, qdot, states)
+    qddot, _ = accelerations(system, params, t, q, qdot, FixedLoads(forces, torques))
+    k, r = len(bodies), state_rows.shape[1]
+    n7 = q.shape[0]
+    response = acceleration_response(system, params, q, qdot, bodies, blocks)  # (7n, k, m)
+    if r:  # a body's states respond to its own coordinates only
+        own = jnp.einsum("jl,jrm->jrlm", jnp.eye(k, dtype=q.dtype), state_rows)
+        response = jnp.concatenate([response, own.reshape(k * r, k, -1)], axis=0)
+    half = 7 + r
+    columns = tuple([7 * b + i for i in range(7)] + [n7 + r * j + i for i in range(r)]
+                    for j, b in enumerate(bodies))
+    columns = tuple(c for block in columns for c in block)
+    a_q = response[:, :, :half].reshape(n7 + k * r, -1)
+    a_v = response[:, :, half:].reshape(n7 + k * r, -1)
+    f = (qdot, qddot) if states is None else _pack((qdot, qddot, f_states))
+    return f, StiffJacobian(columns, a_q, a_v)
+
+
+def _pack(y):
+    """y = (q, qdot[, (x, xdot)]) as (positions, velocities): q and x raveled after it,
+    qdot and xdot likewise."""
+    if len(y) == 2:
+        return y
+    q, qdot, (x, xdot) = y
+    return jnp.concatenate([q, x.ravel()]), jnp.concatenate([qdot, xdot.ravel()])
+
+
+def _unpack(like, packed):
+    """The inverse of :func:`_pack` for states shaped as ``like``."""
+    if len(like) == 2:
+        return packed
+    n, shape = like[0].shape[0], like[2][0].shape
+    positions, velocities = packed
+    return (positions[:n], velocities[:n],
+            (positions[n:].reshape(shape), velocities[n:].reshape(shape)))
 
 
 def _dense_info(h, y0, y1, f0):
@@ -175,7 +206,10 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         s = b.size
         h = t1 - t0
         hg = h * gamma
-        f0, jac = stiff_jacobian(system, params, t0, *y0, external)
+        states = y0[2] if len(y0) == 3 else None
+        f0, jac = stiff_jacobian(system, params, t0, y0[0], y0[1], external, states)
+        like, y0 = y0, _pack(y0)
+        vf = lambda t, y: _pack(terms.vf(t, _unpack(like, y), args))  # noqa: E731
         factored = jac.factor(hg)
         # per stage: the whole right-hand side f and its implicit part J (Y - y0)
         f_all = jax.tree.map(lambda x: jnp.zeros((s,) + x.shape, x.dtype).at[0].set(x), f0)
@@ -188,7 +222,7 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
             right = jax.tree.map(lambda x, y: h * (x + y), _weighted(a_e[i], explicit),
                                  _weighted(a_i[i], f_stiff))
             z = jac.solve(hg, factored, right)
-            f = terms.vf(t0 + c[i] * h, jax.tree.map(jnp.add, y0, z), args)
+            f = vf(t0 + c[i] * h, jax.tree.map(jnp.add, y0, z))
             put = lambda stacked, x: jax.tree.map(lambda u, v: u.at[i].set(v), stacked, x)  # noqa: E731
             return put(f_all, f), put(f_stiff, jac.matvec(z))
 
@@ -197,9 +231,13 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         # At about 1 ms Baumgarte's feedback (10 1/s) lets the joints drift by about
         # 1 um over the paper's curve (Tsit5's shorter steps: nm); one projection per
         # step keeps them at the explicit method's level.
-        y1 = project_state(system, params, *y1)
-        error = jax.tree.map(lambda d: h * d, _weighted(jnp.asarray(b_error), f_all))
-        return y1, error, _dense_info(h, y0, y1, f0), None, diffrax.RESULTS.successful
+        y1 = _unpack(like, y1)
+        y1 = project_state(system, params, y1[0], y1[1]) + y1[2:]
+        error = _unpack(like, jax.tree.map(lambda d: h * d,
+                                           _weighted(jnp.asarray(b_error), f_all)))
+        dense = {key: _unpack(like, value)
+                 for key, value in _dense_info(h, y0, _pack(y1), f0).items()}
+        return y1, error, dense, None, diffrax.RESULTS.successful
 
     def func(self, terms, t0, y0, args):
         return terms.vf(t0, y0, args)

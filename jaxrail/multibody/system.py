@@ -372,13 +372,33 @@ def accelerations_dense(system: System, params: SystemParams, t, q, qdot,
     return _augmented_solve(mass_matrix(system, params, q), phi_q, rhs_top, rhs_bottom)
 
 
+class FixedLoads(eqx.Module):
+    """An ``external`` hook that returns loads computed beforehand: forces and torques
+    (n, 3) [N, N m], global."""
+
+    forces: jax.Array
+    torques: jax.Array
+
+    def __call__(self, t, q, qdot):
+        return self.forces, self.torques
+
+
 def rhs(t, y, args):
-    """diffrax vector field: y = (q, qdot), args = (system, params[, external])."""
+    """diffrax vector field, args = (system, params[, external]).
+
+    ``y = (q, qdot)``: the bodies' coordinates and velocities; or ``y = (q, qdot,
+    states)`` with further states that are not rigid bodies (a flexible track's rails):
+    then ``external.coupled(t, q, qdot, states)`` returns the bodies' loads (forces,
+    torques (n, 3)) and the states' derivatives (same structure as ``states``)."""
     system, params, *rest = args
     external = rest[0] if rest else None
-    q, qdot = y
-    qddot, _ = accelerations(system, params, t, q, qdot, external)
-    return qdot, qddot
+    q, qdot = y[0], y[1]
+    if len(y) == 2:
+        qddot, _ = accelerations(system, params, t, q, qdot, external)
+        return qdot, qddot
+    forces, torques, states_dot = external.coupled(t, q, qdot, y[2])
+    qddot, _ = accelerations(system, params, t, q, qdot, FixedLoads(forces, torques))
+    return qdot, qddot, states_dot
 
 
 # ---- diagnostics --------------------------------------------------------------------
@@ -466,16 +486,21 @@ def consistent_initial_conditions(system: System, params: SystemParams, q0, qdot
 def simulate_system(system: System, params: SystemParams, q0, qdot0, t1, dt0=1e-3,
                     saveat=None, rtol=1e-8, atol=1e-8, solver=None, t0=0.0,
                     external=None, max_steps=100_000, adjoint=None, throw=True,
-                    stepsize_controller=None, event=None, progress_meter=None):
+                    stepsize_controller=None, event=None, progress_meter=None,
+                    states0=None):
     """Integrate eq. (19) with diffrax from (q0, qdot0) at t0 [s] to t1 [s].
 
     Returns diffrax's Solution, with ys = (q (..., 7 n), qdot (..., 7 n)) at `saveat`
-    (default: t1 only). solver defaults to Tsit5; stepsize_controller to a
+    (default: t1 only), and the further states after them when ``states0`` (a pytree
+    of arrays, integrated with the bodies through ``external.coupled``, :func:`rhs`)
+    is given. solver defaults to Tsit5; stepsize_controller to a
     PIDController with rtol, atol (pass diffrax.ConstantStepSize() for fixed steps
     dt0); adjoint to RecursiveCheckpointAdjoint (reverse-mode AD works). event and
     progress_meter are passed to diffrax (a terminating diffrax.Event, a progress meter).
     """
     y0 = (jnp.asarray(q0, dtype=jnp.float64), jnp.asarray(qdot0, dtype=jnp.float64))
+    if states0 is not None:
+        y0 = y0 + (jax.tree.map(lambda x: jnp.asarray(x, dtype=jnp.float64), states0),)
     return diffrax.diffeqsolve(
         diffrax.ODETerm(rhs),
         diffrax.Tsit5() if solver is None else solver,

@@ -4,7 +4,8 @@ duration and solver options, read from TOML files; built-in ones by name.
 Built-in: ``paper-curve`` (the paper's example with real S1002 / UIC60 1:40 profiles),
 ``paper-curve-simplified`` (the paper's simplified S1002), ``straight``,
 ``straight-irregular`` (the trailer on straight track with German low-level
-irregularities), and
+irregularities), ``paper-curve-irregular`` (the paper's curve on German low-level
+irregularities and the co-moving flexible track), and
 ``bogie-curve-entry`` (a loaded bogie running into a 300 m curve onto the flange root
 in 1 s, fixed steps: the identification scenario). The file
 format is described in docs/scenarios.md.
@@ -23,13 +24,14 @@ from . import checks
 from .irregularities import IrregularitySpec, parse_irregularities
 from ..simulation import INTEGRATORS, SolverOptions, run_span, simulate
 from ..track import Arc, Straight, Track, Transition
+from ..track.flexible import FlexibleTrack
 from ..vehicles import CONTACT_MODELS, bogie, contact_model, single_wheelset, trailer
 from ..vehicles.trailer import trailer_values
 
 __all__ = ["BUILTIN", "Scenario", "load_scenario", "parse_scenario", "run_scenario"]
 
-BUILTIN = ("paper-curve", "paper-curve-simplified", "straight", "straight-irregular",
-           "bogie-curve-entry")
+BUILTIN = ("paper-curve", "paper-curve-simplified", "paper-curve-irregular", "straight",
+           "straight-irregular", "bogie-curve-entry")
 _SEGMENTS = {"straight": (Straight, {"length"}),
              "transition": (Transition, {"length"}),
              "arc": (Arc, {"length", "radius", "direction", "cant"})}
@@ -60,6 +62,7 @@ class Scenario:
     contact: str = "online"
     integrator: str = "tsit5"
     irregularities: IrregularitySpec | None = None
+    flexible: dict | None = None
 
     def solver_options(self, duration=None, progress=False) -> SolverOptions:
         """SolverOptions with ``output_rate`` samples per second over the duration."""
@@ -87,6 +90,11 @@ class Scenario:
                 **{k: v for k, v in s.items() if k != "kind"}) for s in self.segments])
         except ValueError as error:
             raise ValueError(f"{self.source}: [track] segments: {error}") from error
+        if self.flexible is not None:
+            try:
+                track = track.with_support(FlexibleTrack(**self.flexible).checked())
+            except ValueError as error:
+                raise ValueError(f"{self.source}: [track] flexible: {error}") from error
         if self.irregularities is None:
             return track
         try:
@@ -139,7 +147,7 @@ class Scenario:
 
 _TABLES = {"vehicle": {"model", "wheel", "rail", "inclination", "data"},
            "contact": {"friction", "mode"},
-           "track": {"segments"},
+           "track": {"segments", "flexible"},
            "run": {"speed", "misalignment", "duration"},
            "solver": {"rtol", "atol", "output_rate", "fixed_step", "integrator"},
            "irregularities": None}
@@ -172,6 +180,27 @@ def _segments(raw, where):
                 values[key] = checks.number(segment[key], key, here)
         out.append(values)
     return tuple(out)
+
+
+def _flexible(raw, where):
+    """``[track] flexible``: false (rigid rails, the default), true (the co-moving
+    flexible track with its default values) or a table of ``mass``, ``stiffness``,
+    ``damping``, each [lateral, vertical] (:class:`jaxrail.track.FlexibleTrack`)."""
+    if raw is None or raw is False:
+        return None
+    if raw is True:
+        return {}
+    here = f"{where}: [track] flexible"
+    if not isinstance(raw, dict):
+        raise ValueError(f"{here} must be true, false or a table of mass, stiffness and "
+                         f"damping, got {raw!r}")
+    checks.known_keys(raw, {"mass", "stiffness", "damping"}, where, "[track] flexible")
+    values = {}
+    for key, value in raw.items():
+        if not (isinstance(value, list) and len(value) == 2):
+            raise ValueError(f"{here}: {key} must be [lateral, vertical], got {value!r}")
+        values[key] = tuple(checks.number(v, key, here) for v in value)
+    return values
 
 
 def _vehicle_data(vehicle, where):
@@ -233,6 +262,7 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
         contact=checks.text(contact, "mode", where, "[contact]", "online", CONTACT_MODELS),
         integrator=checks.text(solver, "integrator", where, "[solver]", "tsit5", INTEGRATORS),
         irregularities=parse_irregularities(raw.get("irregularities"), where),
+        flexible=_flexible(tables["track"].get("flexible"), where),
     )
     checks.run_size(scenario.duration, scenario.output_rate, scenario.fixed_step, where)
     return scenario

@@ -29,6 +29,9 @@ RANGES = {
     "defect_wavelength": (0.1, 1000.0, "m"),
     "defect_amplitude": (-0.05, 0.05, "m"),
     "defect_position": (-1e5, 1e5, "m"),
+    "mass": (1.0, 1e4, "kg"),
+    "stiffness": (1e5, 1e11, "N/m"),
+    "damping": (0.0, 1e9, "N s/m"),
 }
 MAX_OUTPUTS = 200_001
 MAX_STEPS = 2_000_000

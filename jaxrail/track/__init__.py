@@ -26,6 +26,7 @@ from .layout import straight_track as straight_track
 from .projection import from_track_coordinates as from_track_coordinates
 from .projection import project as project
 from .projection import to_track_coordinates as to_track_coordinates
+from .flexible import FlexibleTrack as FlexibleTrack
 from .rails import HALF_TAPING_DISTANCE as HALF_TAPING_DISTANCE
 from .rails import rail_displacement as rail_displacement
 from .rails import rail_frame as rail_frame
@@ -34,7 +35,7 @@ from .rails import rail_under_wheel as rail_under_wheel
 from .rails import track_irregularity as track_irregularity
 from .rails import wheel_origin as wheel_origin
 
-__all__ = ["Arc", "cant_angle", "centreline_position", "CHANNELS", "curvature",
+__all__ = ["Arc", "FlexibleTrack", "cant_angle", "centreline_position", "CHANNELS", "curvature",
            "curve_layout", "from_track_coordinates", "HALF_TAPING_DISTANCE", "heading",
            "Irregularity", "project", "rail_displacement", "rail_frame", "rail_point",
            "rail_under_wheel", "Straight", "straight_track", "superelevation",

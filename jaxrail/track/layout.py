@@ -37,6 +37,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._float64 import require_float64
 from .geometry import local_heading, local_offset
+from .flexible import FlexibleTrack
 from .irregularity import Irregularity
 
 
@@ -88,6 +89,11 @@ class Track(eqx.Module):
         kinds: segment kinds ('straight', 'arc', 'transition'), static.
         irregularity: the track's :class:`~jaxrail.track.irregularity.Irregularity`, or
             None for the ideal track (:meth:`with_irregularity`).
+        support: the rails' :class:`~jaxrail.track.flexible.FlexibleTrack` under each
+            wheel, or None for rigid rails (:meth:`with_support`).
+        rail_deflection: (2, 2) [m], the deflection of the rails (left, right;
+            lateral, vertical) under the one wheelset whose contact is being evaluated
+            (:meth:`under_wheelset`, set by the loads), or None.
     """
 
     segment_start: Float[Array, " n"]
@@ -104,6 +110,20 @@ class Track(eqx.Module):
     sample_xy: Float[Array, "m 2"]
     kinds: tuple[str, ...] = eqx.field(static=True)
     irregularity: Irregularity | None = None
+    support: FlexibleTrack | None = None
+    rail_deflection: Float[Array, "2 2"] | None = None
+
+    def with_support(self, support: FlexibleTrack | None) -> "Track":
+        """This track with flexible rails on ``support`` (None: rigid rails)."""
+        if support is not None and not isinstance(support, FlexibleTrack):
+            raise TypeError(f"support must be a FlexibleTrack or None, got "
+                            f"{type(support).__name__}")
+        return dataclasses.replace(self, support=support)
+
+    def under_wheelset(self, deflection) -> "Track":
+        """This track with its rails moved by ``deflection`` (2, 2) [m] (left, right;
+        lateral, vertical): the rails under one wheelset of a flexible track."""
+        return dataclasses.replace(self, rail_deflection=deflection)
 
     def with_irregularity(self, irregularity: Irregularity | None) -> "Track":
         """This layout with ``irregularity`` (None: the ideal track)."""

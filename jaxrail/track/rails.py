@@ -8,7 +8,10 @@ A rail's profile origin and frame at arc length ``s`` are made of
    :func:`jaxrail.profiles.rail_offset`);
 3. the track's irregularity, when it has one (:attr:`Track.irregularity`,
    :mod:`jaxrail.track.irregularity`): the rail moved by ``y = a + side g / 2`` along
-   ``n`` and ``z = v + side c / 2`` along ``b``.
+   ``n`` and ``z = v + side c / 2`` along ``b``;
+4. on a flexible track, the rail's deflection under the wheelset being evaluated
+   (:attr:`Track.rail_deflection`, :mod:`jaxrail.track.flexible`), along the same
+   ``n`` and ``b``.
 
 The contact search, the contact tables, the loads, the initial equilibrium and the
 outputs all find a wheel's rail through :func:`rail_under_wheel` and
@@ -34,12 +37,18 @@ def wheel_origin(wheelset_position, wheelset_rotation, side) -> Float[Array, "3"
 
 def rail_displacement(track, s, side) -> tuple[Float[Array, ""], Float[Array, ""]]:
     """``(lateral, vertical)`` [m] of the ``side`` rail from its design place at ``s``
-    [m], along the canted track frame's ``n`` and ``b``: the irregularity's, or zeros
-    on an ideal track."""
-    if getattr(track, "irregularity", None) is None:
-        zero = jnp.zeros((), dtype=jnp.float64)
-        return zero, zero
-    return track.irregularity.rail_displacement(s, side)
+    [m], along the canted track frame's ``n`` and ``b``: the irregularity's (zeros on an
+    ideal track) plus, on a flexible track, the rail's deflection under the wheelset
+    being evaluated (:attr:`Track.rail_deflection`, :mod:`jaxrail.track.flexible`)."""
+    zero = jnp.zeros((), dtype=jnp.float64)
+    lateral, vertical = zero, zero
+    if getattr(track, "irregularity", None) is not None:
+        lateral, vertical = track.irregularity.rail_displacement(s, side)
+    deflection = getattr(track, "rail_deflection", None)
+    if deflection is not None:
+        row = jnp.where(jnp.asarray(side) > 0, deflection[0], deflection[1])
+        lateral, vertical = lateral + row[0], vertical + row[1]
+    return lateral, vertical
 
 
 def rail_frame(

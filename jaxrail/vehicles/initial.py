@@ -24,7 +24,7 @@ from ..multibody import quaternion as qt
 from ..multibody import velocities_from_twists
 from ..track import track_frame, track_irregularity
 from .vehicle import Vehicle, VehicleParams
-from .loads import wheelset_loads
+from .loads import rail_loads, wheelset_loads
 
 HEIGHT_BISECTIONS = 50  # from [r0/2, 3 r0/2]: 4e-16 m
 ROLL_BISECTIONS = 40  # from [-MAX_ROLL, MAX_ROLL]: 4e-14 rad
@@ -155,9 +155,16 @@ def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalig
     mass = params.system.bodies.mass
     load = -jnp.sum(mass) * params.system.gravity[2] / len(wheelsets)
     alignment = lambda s: track_irregularity(track, s)[0]  # noqa: E731
-    heights, rolls, radii = jax.vmap(lambda s: wheelset_rest_pose(
-        vehicle, params, track, s, misalignment + alignment(s), load, speed, model))(
-        s0 + layout[wheelsets, 0])
+    stations = s0 + layout[wheelsets, 0]
+    rest = lambda under, s: wheelset_rest_pose(  # noqa: E731
+        vehicle, params, under, s, misalignment + alignment(s), load, speed, model)
+    rails = None
+    if track.support is None:
+        heights, rolls, radii = jax.vmap(lambda s: rest(track, s))(stations)
+    else:
+        heights, rolls, radii, rails = _rest_on_flexible_rails(vehicle, params, track, rest,
+                                                               stations, misalignment,
+                                                               load, speed, model)
     lift = jnp.mean(heights) - params.nominal_radius
 
     # per body: its own wheelset (wheelsets and axleboxes), or -1
@@ -179,4 +186,43 @@ def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalig
     spin = jnp.zeros(len(layout)).at[wheelsets].set(speed / radii)
     axle = jax.vmap(qt.rotation_matrix)(p)[:, :, 1]
     qdot = velocities_from_twists(q, velocity, spin[:, None] * axle)
-    return consistent_initial_conditions(vehicle.system, params.system, q, qdot)
+    q, qdot = consistent_initial_conditions(vehicle.system, params.system, q, qdot)
+    return (q, qdot) if rails is None else (q, qdot, rails)
+
+
+REST_PASSES = 2
+"""Rest poses solved on a flexible track: the first on rails lowered by the wheel
+loads, the second on rails also moved sideways by the first pose's lateral forces."""
+
+
+def _rest_on_flexible_rails(vehicle, params, track, rest, stations, misalignment, load,
+                            speed, model):
+    """Rest poses (heights, rolls, radii (W,)) of the wheelsets at ``stations`` [m] on
+    rails deflected by their wheels' static forces, and the rails' rest state ``(w,
+    zeros)`` (W, 2, 2) [m, m/s] (:mod:`jaxrail.track.flexible`). The vertical deflection
+    is exact (each wheel carries ``load / 2`` [N] by construction); the lateral one is
+    that of the previous pass's forces (:data:`REST_PASSES`)."""
+    support = track.support
+    pressed = jnp.zeros((2, 2)).at[:, 1].set(-0.5 * load)  # each wheel's load on its rail
+
+    def rail_forces(under, s, height, roll):
+        position, rotation = wheelset_pose(under, s, misalignment + track_irregularity(
+            track, s)[0], height, roll)
+        velocity = speed * rotation[:, 0]
+        spin = (speed / params.nominal_radius) * rotation[:, 1]
+        _, _, patches, forces = wheelset_loads(vehicle, params, under, position, rotation,
+                                               velocity, spin, model)
+        return rail_loads(track, patches, forces)
+
+    def one(s):
+        w = support.static_deflection(pressed)  # (2 rails, 2 directions)
+        for _ in range(REST_PASSES - 1):
+            under = track.under_wheelset(w)
+            height, roll, _ = rest(under, s)
+            lateral = support.static_deflection(rail_forces(under, s, height, roll))[:, 0]
+            w = w.at[:, 0].set(lateral)
+        height, roll, radius = rest(track.under_wheelset(w), s)
+        return height, roll, radius, w
+
+    heights, rolls, radii, w = jax.vmap(one)(stations)
+    return heights, rolls, radii, (w, jnp.zeros_like(w))

@@ -29,6 +29,7 @@ from ..contact.table_cache import contact_table
 from ..multibody import accelerations
 from ..multibody import quaternion as qt
 from ..multibody.forces import body_torque
+from ..track import track_frame
 from .vehicle import Vehicle, VehicleParams, wheelset_states
 from .wheel_rail import ContactParameters, patch_force_jacobian, patch_loads
 
@@ -88,29 +89,57 @@ def resolve_contact_model(model):
     return OnlineContact() if model is None else model
 
 
+def rail_axes(track, patches) -> jax.Array:
+    """(2, 2, 3): for each rail under a wheelset (left, right), the unit vectors along
+    which it deflects (lateral: the canted track frame's ``n``; vertical: its ``b``),
+    global, at the rail section under the wheel (``patches`` (2, P) of the wheelset)."""
+    frames = jax.vmap(lambda s: track_frame(track, s))(patches.s_rail[:, 0])  # (2, 3, 3)
+    return jnp.swapaxes(frames[:, :, 1:], 1, 2)
+
+
+def rail_loads(track, patches, patch_forces) -> jax.Array:
+    """(2, 2) [N]: the wheels' forces on the rails under one wheelset (left, right;
+    lateral, vertical; along :func:`rail_axes`), the opposite of the rails' forces on
+    the wheels."""
+    on_wheels = jnp.sum(patch_forces.force, axis=1)  # (2, 3)
+    return -jnp.einsum("sdi,si->sd", rail_axes(track, patches), on_wheels)
+
+
 def wheelset_loads(vehicle: Vehicle, params: VehicleParams, track, position, rotation,
-                   velocity, angular_velocity, model=None):
+                   velocity, angular_velocity, model=None, rails=None):
     """Wheel-rail force (3,) [N] and moment (3,) [N m] about the centre of one wheelset,
     global, with its patches and patch forces: ``(force, moment, patches, forces)``.
-    ``model``: the contact model (default :class:`OnlineContact`)."""
+    ``model``: the contact model (default :class:`OnlineContact`). ``rails``: on a
+    flexible track, the deflection and rate ``(w, wdot)`` (2, 2) [m, m/s] of the rails
+    under this wheelset (:mod:`jaxrail.track.flexible`); None: rigid rails."""
+    rail_velocity = None
+    if rails is not None:
+        track = track.under_wheelset(rails[0])
     patches = resolve_contact_model(model).wheelset_patches(vehicle, params, track, position,
                                                              rotation)
+    if rails is not None:
+        rail_velocity = jnp.einsum("sd,sdi->si", rails[1], rail_axes(track, patches))
     force, moment, forces = patch_loads(params.contact, patches, position, velocity,
-                                        angular_velocity)
+                                        angular_velocity, rail_velocity)
     return force, moment, patches, forces
 
 
-def contact_loads(vehicle: Vehicle, params: VehicleParams, track, q, qdot, model=None):
+def contact_loads(vehicle: Vehicle, params: VehicleParams, track, q, qdot, model=None,
+                  rails=None):
     """Wheel-rail loads on all bodies and the contact details.
 
     Returns ``(forces (n, 3) [N], torques (n, 3) [N m], patches, patch_forces)``: the
     forces at the body centres and the torques, global (zero on bodies that are not
     wheelsets), and per wheelset (leading axis W) the contact patches and their forces.
-    ``model``: the contact model (default :class:`OnlineContact`).
+    ``model``: the contact model (default :class:`OnlineContact`). ``rails``: on a
+    flexible track, the rails' deflections and rates ``(w, wdot)``, each (W, 2, 2)
+    (:mod:`jaxrail.track.flexible`); None: rigid rails.
     """
     position, rotation, velocity, omega = wheelset_states(vehicle, q, qdot)
-    load = lambda r, a, v, w: wheelset_loads(vehicle, params, track, r, a, v, w, model)  # noqa: E731
-    force, moment, patches, patch_forces = jax.vmap(load)(position, rotation, velocity, omega)
+    load = lambda r, a, v, w, x: wheelset_loads(vehicle, params, track, r, a, v, w,  # noqa: E731
+                                                model, x)
+    force, moment, patches, patch_forces = jax.vmap(load)(position, rotation, velocity, omega,
+                                                          rails)
     n = vehicle.system.n_bodies
     index = np.asarray(vehicle.wheelsets)
     forces = jnp.zeros((n, 3)).at[index].set(force)
@@ -118,36 +147,72 @@ def contact_loads(vehicle: Vehicle, params: VehicleParams, track, q, qdot, model
     return forces, torques, patches, patch_forces
 
 
-def wheelset_load_jacobian(contact: ContactParameters, patches, q_body, qdot_body, moment):
+def wheelset_load_jacobian(contact: ContactParameters, patches, q_body, qdot_body, moment,
+                           rails=None, axes=None):
     """d g / d (q, qdot) (7, 14): the derivative of a wheelset's generalized wheel-rail
     load g (7,) (force, then the Euler-parameter components of the moment) with
     respect to its own coordinates q_body (7,) and velocities qdot_body (7,), the
     patches held where they are (:func:`jaxrail.vehicles.wheel_rail.patch_force_jacobian`).
     ``moment`` (3,) [N m]: the wheel-rail moment about the centre at this state.
 
+    On a flexible track (``rails`` = the rails' ``(w, wdot)`` (2, 2) under this
+    wheelset, ``axes`` (2, 2, 3) their directions, :func:`rail_axes`) the columns are
+    (q (7), w (4), qdot (7), wdot (4)) and a second block follows: the wheels' forces
+    on the rails (4,) [N] (:func:`rail_loads`, raveled (side, direction)) by the same
+    22 columns: ``(d_g (7, 22), d_rail (4, 22))``.
+
     These are the stiff parts of the contact loads (:mod:`jaxrail.multibody.imex`):
     the normal stiffness and the creep damping; the geometric terms left out are slow."""
     r, p, pdot = q_body[:3], q_body[3:], qdot_body[3:]
+    extra = 0 if rails is None else 4
     e = qt.e_matrix(p)
     omega_of_p = jax.jacfwd(lambda x: 2.0 * qt.e_matrix(x) @ pdot)(p)  # (3, 4)
-    eye, z3, z4 = jnp.eye(3), jnp.zeros((3, 3)), jnp.zeros((3, 4))
-    # the wheelset's motion per unit change of (r, p, rdot, pdot)
-    d_shift = jnp.concatenate([eye, z4, z3, z4], axis=1)
-    d_turn = jnp.concatenate([z3, 2.0 * e, z3, z4], axis=1)
-    d_velocity = jnp.concatenate([z3, z4, eye, z4], axis=1)
-    d_omega = jnp.concatenate([z3, omega_of_p, z3, 2.0 * e], axis=1)
+    eye, z3, z4, zx = jnp.eye(3), jnp.zeros((3, 3)), jnp.zeros((3, 4)), jnp.zeros((3, extra))
+    # the wheelset's motion per unit change of (r, p, [w], rdot, pdot, [wdot])
+    d_shift = jnp.concatenate([eye, z4, zx, z3, z4, zx], axis=1)
+    d_turn = jnp.concatenate([z3, 2.0 * e, zx, z3, z4, zx], axis=1)
+    d_velocity = jnp.concatenate([z3, z4, zx, eye, z4, zx], axis=1)
+    d_omega = jnp.concatenate([z3, omega_of_p, zx, z3, 2.0 * e, zx], axis=1)
     velocity, omega = qdot_body[:3], 2.0 * e @ pdot
-    one = lambda patch: patch_force_jacobian(contact, patch, r, velocity, omega, d_shift,  # noqa: E731
-                                             d_turn, d_velocity, d_omega)
-    d_forces = jax.vmap(jax.vmap(one))(patches)  # (2, P, 3, 14)
+    if rails is None:
+        one = lambda patch: patch_force_jacobian(contact, patch, r, velocity, omega,  # noqa: E731
+                                                 d_shift, d_turn, d_velocity, d_omega)
+        d_forces = jax.vmap(jax.vmap(one))(patches)  # (2, P, 3, 14)
+    else:
+        # rail (side, direction) k moves along axes[side, direction]: columns 7 + k, 18 + k
+        unit = jnp.eye(4).reshape(2, 2, 4)
+        shifts = jnp.einsum("sdi,sdk->sik", axes, unit)  # (2, 3, 4) per side
+        zero = jnp.zeros((2, 3, 7))
+        d_rail_shift = jnp.concatenate([zero, shifts, zero, 0.0 * shifts], axis=2)
+        d_rail_velocity = jnp.concatenate([zero, 0.0 * shifts, zero, shifts], axis=2)
+        rail_velocity = jnp.einsum("sd,sdi->si", rails[1], axes)
+
+        def side(patch_row, v_rail, d_shift_rail, d_velocity_rail):
+            one = lambda patch: patch_force_jacobian(  # noqa: E731
+                contact, patch, r, velocity, omega, d_shift, d_turn, d_velocity, d_omega,
+                v_rail, d_shift_rail, d_velocity_rail)
+            return jax.vmap(one)(patch_row)
+        d_forces = jax.vmap(side)(patches, rail_velocity, d_rail_shift, d_rail_velocity)
     arms = patches.rail_point - r
     d_moment = jnp.sum(jnp.cross(arms[..., :, None], d_forces, axisa=-2, axisb=-2, axisc=-2),
                        axis=(0, 1))
     torque = lambda x, n: body_torque(x, n)[3:]  # noqa: E731
     by_moment, by_p = jax.jacfwd(torque, argnums=(1, 0))(p, moment)
     d_generalized = by_moment @ d_moment + jnp.concatenate(
-        [jnp.zeros((4, 3)), by_p, jnp.zeros((4, 7))], axis=1)
-    return jnp.concatenate([jnp.sum(d_forces, axis=(0, 1)), d_generalized])
+        [jnp.zeros((4, 3)), by_p, jnp.zeros((4, 7 + 2 * extra))], axis=1)
+    d_g = jnp.concatenate([jnp.sum(d_forces, axis=(0, 1)), d_generalized])
+    if rails is None:
+        return d_g
+    d_rail = -jnp.einsum("sdi,spim->sdm", axes, d_forces).reshape(4, -1)
+    return d_g, d_rail
+
+
+def _rails_rate(track, rails, patches, patch_forces):
+    """``(wdot, wddot)`` (W, 2, 2) of a flexible track's rails at ``rails = (w, wdot)``
+    under the wheels' patch forces (:mod:`jaxrail.track.flexible`)."""
+    loads = jax.vmap(lambda p, f: rail_loads(track, p, f))(patches, patch_forces)
+    deflection, rate = rails
+    return rate, track.support.accelerations(deflection, rate, loads)
 
 
 class VehicleLoads(eqx.Module):
@@ -167,17 +232,45 @@ class VehicleLoads(eqx.Module):
     def __call__(self, t, q, qdot):
         return contact_loads(self.vehicle, self.params, self.track, q, qdot, self.model)[:2]
 
-    def linearised(self, t, q, qdot):
+    def coupled(self, t, q, qdot, rails):
+        """On a flexible track (``track.support``): ``(forces, torques, (wdot,
+        wddot))``, the loads of ``__call__`` with the rails at ``rails = (w, wdot)``
+        (W, 2, 2) [m, m/s], and the rails' derivatives (:mod:`jaxrail.track.flexible`),
+        from one contact evaluation."""
+        forces, torques, patches, patch_forces = contact_loads(
+            self.vehicle, self.params, self.track, q, qdot, self.model, rails)
+        return forces, torques, _rails_rate(self.track, rails, patches, patch_forces)
+
+    def linearised(self, t, q, qdot, rails=None):
         """``(forces, torques, bodies, blocks)``: the loads of ``__call__``, the
         wheelset body indices and each wheelset's load Jacobian (W, 7, 14)
-        (:func:`wheelset_load_jacobian`), from one contact evaluation."""
-        forces, torques, patches, _ = contact_loads(self.vehicle, self.params, self.track,
-                                                    q, qdot, self.model)
+        (:func:`wheelset_load_jacobian`), from one contact evaluation.
+
+        On a flexible track, with the rails at ``rails = (w, wdot)`` (W, 2, 2):
+        ``(forces, torques, rails_dot, bodies, blocks, rail_rows)``, with the rails'
+        derivatives as :meth:`coupled`, ``blocks`` (W, 7, 22) by each wheelset's (q,
+        w, qdot, wdot) and ``rail_rows`` (W, 4, 22): the rails' accelerations
+        (:class:`~jaxrail.track.flexible.FlexibleTrack`) by the same columns."""
+        forces, torques, patches, patch_forces = contact_loads(
+            self.vehicle, self.params, self.track, q, qdot, self.model, rails)
         index = np.asarray(self.vehicle.wheelsets)
-        blocks = jax.vmap(lambda x, a, b, m: wheelset_load_jacobian(self.params.contact, x, a,
-                                                                    b, m))(
-            patches, q.reshape(-1, 7)[index], qdot.reshape(-1, 7)[index], torques[index])
-        return forces, torques, self.vehicle.wheelsets, blocks
+        bodies = q.reshape(-1, 7)[index], qdot.reshape(-1, 7)[index], torques[index]
+        contact = self.params.contact
+        if rails is None:
+            blocks = jax.vmap(lambda x, a, b, m: wheelset_load_jacobian(contact, x, a, b, m))(
+                patches, *bodies)
+            return forces, torques, self.vehicle.wheelsets, blocks
+        axes = jax.vmap(lambda x: rail_axes(self.track, x))(patches)
+        blocks, on_rails = jax.vmap(lambda x, a, b, m, w, v, u: wheelset_load_jacobian(
+            contact, x, a, b, m, (w, v), u))(patches, *bodies, *rails, axes)
+        support = self.track.support
+        stiffness, damping, mass = (jnp.tile(x, 2) for x in (support.stiffness,
+                                                             support.damping, support.mass))
+        own = jnp.zeros((4, 22)).at[:, 7:11].set(-jnp.diag(stiffness)).at[:, 18:22].set(
+            -jnp.diag(damping))
+        rail_rows = (on_rails + own) / mass[:, None]
+        return (forces, torques, _rails_rate(self.track, rails, patches, patch_forces),
+                self.vehicle.wheelsets, blocks, rail_rows)
 
 
 def vehicle_accelerations(vehicle: Vehicle, params: VehicleParams, track, t, q, qdot,

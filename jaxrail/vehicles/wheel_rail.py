@@ -106,17 +106,19 @@ def _patch_hertz(params: ContactParameters, patch):
     return unit, stiffness
 
 
-def _patch_rates(patch, centre, velocity, angular_velocity):
+def _patch_rates(patch, centre, velocity, angular_velocity, rail_velocity):
     """The velocity-dependent inputs of a patch's force laws: ``(rate, xi, eta, phi,
     speed)``: the penetration rate [m/s] (the wheel point moving into the rail along
-    the normal), the creepages at the middle of the overlap and the rolling speed
+    the normal, relative to the rail, which moves at ``rail_velocity`` (3,) [m/s] on a
+    flexible track), the creepages at the middle of the overlap and the rolling speed
     [m/s]."""
     wheel_point_velocity = velocity + jnp.cross(angular_velocity, patch.wheel_point - centre)
-    rate = -wheel_point_velocity @ patch.normal
+    rate = -(wheel_point_velocity - rail_velocity) @ patch.normal
     # Creepages at the middle of the overlap: the deformed interface of two bodies of
     # the same steel (the rail point would bias xi by -delta/r, the wheel point by +).
     interface = 0.5 * (patch.wheel_point + patch.rail_point)
-    xi, eta, phi = creepages(velocity, angular_velocity, centre, interface, patch.frame)
+    xi, eta, phi = creepages(velocity, angular_velocity, centre, interface, patch.frame,
+                             rail_velocity=rail_velocity)
     return rate, xi, eta, phi, jnp.abs(velocity @ patch.frame[:, 0])
 
 
@@ -131,10 +133,12 @@ def _patch_laws(params: ContactParameters, active, unit, stiffness, penetration,
     return normal_force, fx, fy, a, b
 
 
-def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_velocity):
+def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_velocity,
+                  rail_velocity):
     """Forces of one patch slot (scalars); ``patch`` is a ContactPatches entry."""
     unit, stiffness = _patch_hertz(params, patch)
-    rate, xi, eta, phi, speed = _patch_rates(patch, centre, velocity, angular_velocity)
+    rate, xi, eta, phi, speed = _patch_rates(patch, centre, velocity, angular_velocity,
+                                             rail_velocity)
     normal_force, fx, fy, a, b = _patch_laws(params, patch.active, unit, stiffness,
                                              patch.penetration, rate, xi, eta, phi, speed)
     frame = patch.frame
@@ -143,7 +147,8 @@ def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_ve
 
 
 def patch_force_jacobian(params: ContactParameters, patch, centre, velocity,
-                         angular_velocity, d_shift, d_turn, d_velocity, d_angular_velocity):
+                         angular_velocity, d_shift, d_turn, d_velocity, d_angular_velocity,
+                         rail_velocity=None, d_rail_shift=None, d_rail_velocity=None):
     """d force / d x (3, m): the global force on the wheel at one patch as m
     quantities x of the wheelset change, the patch's points, frame and curvatures
     held.
@@ -154,22 +159,34 @@ def patch_force_jacobian(params: ContactParameters, patch, centre, velocity,
     point's displacement along the normal (the normal stiffness), the penetration rate
     and creepages follow the velocities (the creep damping). The force laws are
     differentiated in their six scalar inputs only (penetration, rate, creepages,
-    rolling speed), so the cost does not grow with m."""
+    rolling speed), so the cost does not grow with m.
+
+    On a flexible track the rail under the patch moves at ``rail_velocity`` (3,)
+    [m/s], and ``d_rail_shift``, ``d_rail_velocity`` (3, m) are the derivatives of its
+    displacement [m] and velocity [m/s] (default: a rigid rail)."""
     unit, stiffness = _patch_hertz(params, patch)
+    zero = jnp.zeros_like(d_shift)
+    rail_velocity = jnp.zeros(3) if rail_velocity is None else rail_velocity
+    d_rail_shift = zero if d_rail_shift is None else d_rail_shift
+    d_rail_velocity = zero if d_rail_velocity is None else d_rail_velocity
     arm = patch.wheel_point - centre
-    moved = d_shift + jnp.cross(d_turn.T, arm).T
+    moved = d_shift + jnp.cross(d_turn.T, arm).T - d_rail_shift
     d_penetration = -(patch.normal @ moved)
-    rates = lambda v, w: jnp.stack(_patch_rates(patch, centre, v, w))  # noqa: E731
-    by_velocity, by_omega = jax.jacfwd(rates, argnums=(0, 1))(velocity, angular_velocity)
+    rates = lambda v, w, r: jnp.stack(_patch_rates(patch, centre, v, w, r))  # noqa: E731
+    by_velocity, by_omega, by_rail = jax.jacfwd(rates, argnums=(0, 1, 2))(
+        velocity, angular_velocity, rail_velocity)
     d_inputs = jnp.concatenate([d_penetration[None, :],
-                                by_velocity @ d_velocity + by_omega @ d_angular_velocity])
-    inputs = jnp.concatenate([patch.penetration[None], rates(velocity, angular_velocity)])
+                                by_velocity @ d_velocity + by_omega @ d_angular_velocity
+                                + by_rail @ d_rail_velocity])
+    inputs = jnp.concatenate([patch.penetration[None],
+                              rates(velocity, angular_velocity, rail_velocity)])
     laws = lambda u: jnp.stack(_patch_laws(params, patch.active, unit, stiffness, *u)[:3])  # noqa: E731
     d_laws = jax.jacfwd(laws)(inputs) @ d_inputs  # (N, fx, fy) by x
     return patch.frame[:, jnp.array([2, 0, 1])] @ d_laws
 
 
-def patch_loads(params: ContactParameters, patches, position, velocity, angular_velocity):
+def patch_loads(params: ContactParameters, patches, position, velocity, angular_velocity,
+                rail_velocity=None):
     """Total wheel-rail force and moment on a wheelset from its contact patches.
 
     Arguments:
@@ -179,12 +196,16 @@ def patch_loads(params: ContactParameters, patches, position, velocity, angular_
             contact table.
         position (3,): wheelset centre, global [m].
         velocity (3,), angular_velocity (3,): of the wheelset, global [m/s, rad/s].
+        rail_velocity (2, 3): of the left and right rail under the wheelset, global
+            [m/s] (a flexible track); default zero (rigid rails).
 
     Returns ``(force (3,), moment (3,), patch_forces)``: the resultant force [N] and its
     moment about the wheelset centre [N m], both global, and the per-patch forces.
     """
-    one = lambda patch: _patch_forces(params, patch, position, velocity, angular_velocity)  # noqa: E731
-    forces = jax.vmap(jax.vmap(one))(patches)
+    rail_velocity = jnp.zeros((2, 3)) if rail_velocity is None else rail_velocity
+    one = lambda patch, rail: _patch_forces(params, patch, position, velocity,  # noqa: E731
+                                            angular_velocity, rail)
+    forces = jax.vmap(jax.vmap(one, in_axes=(0, None)))(patches, rail_velocity)
     arms = patches.rail_point - position
     moment = jnp.sum(jnp.cross(arms, forces.force), axis=(0, 1))
     return jnp.sum(forces.force, axis=(0, 1)), moment, forces
