@@ -4,8 +4,10 @@ for 41 s, with the simplified and the real S1002 profiles (built-in scenarios
 
 Prints JSON per profile kind, track (``--tracks smooth german-low``: the design track,
 or the same with a realisation of that irregularity spectrum, seed 7, 3-150 m), contact
-model (``--contacts online table``) and integrator (``--integrators tsit5 imex``), all
-in one process, and each irregular run's wall time over its smooth twin's: compile time, wall
+model (``--contacts online table``), track support (``--supports rigid flexible``: rigid
+rails, or the co-moving flexible track with its default values) and integrator
+(``--integrators tsit5 imex``), all in one process, each irregular run's wall time over
+its smooth twin's and each flexible run's over its rigid twin's: compile time, wall
 time, simulated time, real-time factor, steps accepted and rejected, right-hand-side
 evaluations (Tsit5: 6 per attempted step; IMEX: 8 and one Jacobian of the wheel-rail
 loads), status; for every run after the first of a profile and contact model, its
@@ -17,10 +19,12 @@ cold (the runs use a new, empty persistent compilation cache) and cached (the sa
 programs in a new process that finds them in that cache: ``cached_compile_time_s``,
 from a run of 1 ms with the same options). With ``--save DIR`` it also keeps each run (``DIR/<scenario>.pkl``, the
 SimulationResult as numpy arrays, for experiments/paper_curve/figures.py), its results
-file (``.h5``) and summary (``.json``).
+file (``.h5``) and summary (``.json``). Each run also reports its leading wheelset's
+largest lateral displacement, its outer wheel's largest Q and Y/Q and the largest rail
+deflections.
 Usage: ``python benchmarks/paper_curve.py [--duration 41] [--save DIR]
 [--scenarios paper-curve-simplified paper-curve] [--tracks smooth german-low]
-[--contacts online] [--integrators tsit5 imex]``.
+[--contacts online] [--supports rigid] [--integrators tsit5 imex]``.
 """
 
 import argparse
@@ -65,8 +69,10 @@ def main():
                         choices=("online", "table"))
     parser.add_argument("--integrators", nargs="+", default=["tsit5", "imex"],
                         choices=("tsit5", "imex"))
+    parser.add_argument("--supports", nargs="+", default=["rigid"],
+                        choices=("rigid", "flexible"))
     parser.add_argument("--progress", action="store_true")
-    parser.add_argument("--cached-child", nargs=4, help=argparse.SUPPRESS)
+    parser.add_argument("--cached-child", nargs=5, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.cached_child:
         print(json.dumps(_compile_only(*args.cached_child, args.duration)))
@@ -79,48 +85,61 @@ def main():
         for track in args.tracks:
             for contact in args.contacts:
                 first = None
-                for integrator in args.integrators:
-                    scenario = _scenario(name, track, integrator)
-                    result, vehicle, params, _ = run_scenario(scenario, args.duration,
-                                                              args.progress, contact=contact)
-                    runs.append(_report(name, scenario, contact, integrator, result, first))
-                    runs[-1]["track"] = track
-                    runs[-1]["cached_compile_time_s"] = _cached_compile(
-                        name, track, contact, integrator, args.duration)
-                    print(json.dumps(runs[-1]), flush=True)
-                    first = result if first is None else first
-                    if args.save is not None:
-                        _save(args.save, f"{name}-{track}-{contact}-{integrator}", scenario,
-                              result, vehicle, params)
+                for support in args.supports:
+                    for integrator in args.integrators:
+                        scenario = _scenario(name, track, integrator, support)
+                        result, vehicle, params, _ = run_scenario(
+                            scenario, args.duration, args.progress, contact=contact)
+                        runs.append(_report(name, scenario, contact, integrator, result,
+                                            first))
+                        runs[-1].update(track=track, support=support)
+                        runs[-1]["cached_compile_time_s"] = _cached_compile(
+                            name, track, contact, integrator, support, args.duration)
+                        print(json.dumps(runs[-1]), flush=True)
+                        first = result if first is None else first
+                        if args.save is not None:
+                            _save(args.save, f"{name}-{track}-{contact}-{support}-{integrator}",
+                                  scenario, result, vehicle, params)
     print(json.dumps({"benchmark": "paper_curve", "runs": runs,
                       "irregular_over_smooth_wall_time": _irregular_over_smooth(runs),
+                      "flexible_over_rigid_wall_time": _flexible_over_rigid(runs),
                       "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
                                   "load": os.getloadavg()}}, indent=2))
 
 
-def _scenario(name, track, integrator):
+def _scenario(name, track, integrator, support="rigid"):
     """The built-in scenario ``name`` with ``integrator`` on the design track ("smooth")
-    or on a realisation of the spectrum ``track`` (seed 7, 3-150 m)."""
-    scenario = dataclasses.replace(load_scenario(name), integrator=integrator)
+    or on a realisation of the spectrum ``track`` (seed 7, 3-150 m), on rigid rails or
+    the flexible track (``support``)."""
+    scenario = dataclasses.replace(load_scenario(name), integrator=integrator,
+                                   flexible={} if support == "flexible" else None)
     if track == "smooth":
-        return scenario
+        return dataclasses.replace(scenario, irregularities=None)
     return dataclasses.replace(scenario, irregularities=IrregularitySpec(
         "spectrum", spectrum=track, seed=7))
 
 
 def _irregular_over_smooth(runs):
     """{scenario/track/contact/integrator: wall time over the smooth run's}."""
-    smooth = {(r["scenario"], r["contact"], r["integrator"]): r["wall_time_s"] for r in runs
-              if r["track"] == "smooth"}
-    return {f'{r["scenario"]}/{r["track"]}/{r["contact"]}/{r["integrator"]}': round(
-        r["wall_time_s"] / smooth[(r["scenario"], r["contact"], r["integrator"])], 3)
-        for r in runs if r["track"] != "smooth"
-        and (r["scenario"], r["contact"], r["integrator"]) in smooth}
+    key = lambda r: (r["scenario"], r["contact"], r["support"], r["integrator"])  # noqa: E731
+    smooth = {key(r): r["wall_time_s"] for r in runs if r["track"] == "smooth"}
+    return {"/".join((r["scenario"], r["track"], *key(r)[1:])): round(
+        r["wall_time_s"] / smooth[key(r)], 3)
+        for r in runs if r["track"] != "smooth" and key(r) in smooth}
 
 
-def _compile_only(name, track, contact, integrator, duration):
+def _flexible_over_rigid(runs):
+    """{scenario/track/contact/integrator: a flexible run's wall time over its rigid
+    twin's}."""
+    key = lambda r: (r["scenario"], r["track"], r["contact"], r["integrator"])  # noqa: E731
+    rigid = {key(r): r["wall_time_s"] for r in runs if r["support"] == "rigid"}
+    return {"/".join(key(r)): round(r["wall_time_s"] / rigid[key(r)], 3)
+            for r in runs if r["support"] == "flexible" and key(r) in rigid}
+
+
+def _compile_only(name, track, contact, integrator, support, duration):
     """compile_time_s of a 1 ms run with the options of a ``duration`` run."""
-    scenario = _scenario(name, track, integrator)
+    scenario = _scenario(name, track, integrator, support)
     vehicle, params, track = scenario.build()
     duration = scenario.duration if duration is None else duration
     result = simulate(vehicle, params, track, 1e-3, scenario.speed, scenario.misalignment,
@@ -129,9 +148,10 @@ def _compile_only(name, track, contact, integrator, duration):
     return {"compile_time_s": float(result.compile_time_s), "status": result.status}
 
 
-def _cached_compile(name, track, contact, integrator, duration):
+def _cached_compile(name, track, contact, integrator, support, duration):
     """Compile time [s] of the same programs in a new process (the cache filled)."""
-    command = [sys.executable, __file__, "--cached-child", name, track, contact, integrator]
+    command = [sys.executable, __file__, "--cached-child", name, track, contact, integrator,
+               support]
     if duration is not None:
         command += ["--duration", str(duration)]
     out = subprocess.run(command, stdout=subprocess.PIPE, text=True, check=True)
@@ -158,6 +178,7 @@ def _report(name, scenario, contact, integrator, result, reference):
         "max_constraint_violation_m": float(np.nanmax(result.constraint_violation)),
         "any_nan_in_valid_outputs": bool(np.any(np.isnan(
             np.asarray(result.wheelset_lateral)[np.asarray(result.valid)]))),
+        **_peaks(result),
     }
     if reference is not None:
         valid = np.asarray(result.valid) & np.asarray(reference.valid)
@@ -182,6 +203,22 @@ def _report(name, scenario, contact, integrator, result, reference):
             "max_two_patch_interval_end_difference_s": _interval_difference(*intervals),
         }
     return report
+
+
+def _peaks(result):
+    """The leading wheelset's largest lateral displacement [mm], its outer wheel's
+    largest Q [N] and Y/Q, and the largest rail deflections under any wheel [mm]."""
+    summary = summarize(result)
+    outer = [w for w in summary["wheels"] if w["wheelset"] == 1][OUTER]
+    valid = np.asarray(result.valid)
+    deflection = np.abs(np.asarray(result.rail_deflection)[valid])
+    lateral = summary["wheelsets"][0]["max_lateral_displacement_m"]
+    return {"leading_max_lateral_mm": None if lateral is None else 1e3 * lateral,
+            "outer_max_Q_N": float(np.nanmax(
+                np.asarray(result.wheels.vertical_force)[valid, 0, OUTER])),
+            "outer_max_Y_over_Q": outer["max_Y_over_Q"],
+            "max_rail_deflection_mm": {"lateral": float(1e3 * np.max(deflection[..., 0])),
+                                       "vertical": float(1e3 * np.max(deflection[..., 1]))}}
 
 
 def _flange_onsets(result, valid):

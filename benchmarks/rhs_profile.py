@@ -17,10 +17,17 @@ outside a loop; several times slower for these small programs):
   ``xla_defaults_us``: the same compiled with XLA's default options instead;
 - ``compile_s``: the compile time of each of these programs.
 
+Each on rigid rails and on the co-moving flexible track (``--supports rigid flexible``,
+its default values, :mod:`jaxrail.track.flexible`): there the loads and the right-hand
+side also take the rails' state, at their rest deflection, and the right-hand side
+returns the rails' derivatives too.
+
 With ``--batch N`` also the whole right-hand side vmapped over N states (the initial
 one with the whole vehicle shifted along the global y axis by 0-4 mm), per member.
-Prints one JSON object with an object per model and ``online_over_table``.
-Usage: ``python benchmarks/rhs_profile.py [--calls 40] [--scenario S] [--batch N]``.
+Prints one JSON object with an object per track support, each with one per model, and
+``online_over_table`` and ``flexible_over_rigid`` (whole right-hand sides).
+Usage: ``python benchmarks/rhs_profile.py [--calls 40] [--scenario S] [--batch N]
+[--supports rigid flexible]``.
 """
 
 import argparse
@@ -38,11 +45,12 @@ from jaxrail._compiler import compiler_options
 
 enable_float64()
 
-from jaxrail.multibody import accelerations  # noqa: E402
+from jaxrail.multibody import accelerations, rhs as multibody_rhs  # noqa: E402
 from jaxrail.scenarios import load_scenario  # noqa: E402
 from jaxrail.contact.table_cache import contact_table  # noqa: E402
-from jaxrail.vehicles import (OnlineContact, TableContact, contact_loads,  # noqa: E402
-                              initial_state, vehicle_accelerations)
+from jaxrail.track import FlexibleTrack  # noqa: E402
+from jaxrail.vehicles import (OnlineContact, TableContact, VehicleLoads,  # noqa: E402
+                              contact_loads, initial_state, vehicle_accelerations)
 from jaxrail.vehicles.vehicle import wheelset_states  # noqa: E402
 
 
@@ -89,32 +97,39 @@ def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
     return 1e6 * _median_call_s(compiled, args, calls) / repeats
 
 
-def profile_model(model, vehicle, params, track, q, qdot, calls, batch):
+def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
     """The JSON object of one contact model. Everything but the structure is traced,
     as in :func:`jaxrail.simulation.simulate` (the profiles, the track, the parameters
-    and the contact table are arguments of the compiled program, not constants)."""
-    data, structure = eqx.partition((vehicle, params, track, model), eqx.is_array)
+    and the contact table are arguments of the compiled program, not constants).
+    ``rails``: a flexible track's rails ``(w, wdot)``, or None on rigid rails."""
+    data, structure = eqx.partition((vehicle, params, track, model, rails), eqx.is_array)
 
     def parts_of(function):
         return lambda q, qdot, data: function(q, qdot, *eqx.combine(data, structure))
 
     @parts_of
-    def contact(q, qdot, vehicle, params, track, model):
+    def contact(q, qdot, vehicle, params, track, model, rails):
         position, rotation, _, _ = wheelset_states(vehicle, q, qdot)
-        return jax.vmap(lambda r, a: model.wheelset_patches(vehicle, params, track, r, a))(
-            position, rotation)
+        if rails is None:
+            return jax.vmap(lambda r, a: model.wheelset_patches(vehicle, params, track, r,
+                                                                a))(position, rotation)
+        return jax.vmap(lambda r, a, w: model.wheelset_patches(
+            vehicle, params, track.under_wheelset(w), r, a))(position, rotation, rails[0])
 
     @parts_of
-    def loads(q, qdot, vehicle, params, track, model):
-        return contact_loads(vehicle, params, track, q, qdot, model)[:2]
+    def loads(q, qdot, vehicle, params, track, model, rails):
+        return contact_loads(vehicle, params, track, q, qdot, model, rails)[:2]
 
     @parts_of
-    def multibody(q, qdot, vehicle, params, track, model):
+    def multibody(q, qdot, vehicle, params, track, model, rails):
         return accelerations(vehicle.system, params.system, 0.0, q, qdot)[0]
 
     @parts_of
-    def rhs(q, qdot, vehicle, params, track, model):
-        return vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model)
+    def rhs(q, qdot, vehicle, params, track, model, rails):
+        if rails is None:
+            return vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model)
+        loads = VehicleLoads(vehicle, params, track, model)
+        return multibody_rhs(0.0, (q, qdot, rails), (vehicle.system, params.system, loads))
 
     args = (q, qdot, data)
     parts = {name: timed(f, args, 10 * calls) for name, f in
@@ -147,24 +162,36 @@ def main():
     parser.add_argument("--calls", type=int, default=40)
     parser.add_argument("--scenario", default="paper-curve")
     parser.add_argument("--batch", type=int, default=0, help="members of a vmapped batch")
+    parser.add_argument("--supports", nargs="+", default=["rigid", "flexible"],
+                        choices=("rigid", "flexible"))
     args = parser.parse_args()
     scenario = load_scenario(args.scenario)
     vehicle, params, track = scenario.build()
     table, table_info = contact_table(params.wheel, params.rail, params.rail_offset,
                                       vehicle.config, progress=True)
     models = {"online": OnlineContact(), "table": TableContact(table)}
-    q, qdot = jax.jit(lambda p: initial_state(vehicle, p, track, scenario.speed,
-                                              scenario.misalignment))(params)
-    results = {name: profile_model(model, vehicle, params, track, q, qdot, args.calls,
-                                   args.batch) for name, model in models.items()}
-    results["table"]["table"] = {key: table_info[key] for key in
-                                 ("build_time_s", "cached", "nodes", "level_misses", "path")
-                                 if key in table_info}
-    ratio = {"online_over_table": round(results["online"]["rhs_median_us"]
-                                        / results["table"]["rhs_median_us"], 2)}
+    results, ratios = {}, {"online_over_table": {}, "flexible_over_rigid": {}}
+    for support in args.supports:
+        on = track.with_support(FlexibleTrack() if support == "flexible" else None)
+        state = jax.jit(lambda p, t: initial_state(vehicle, p, t, scenario.speed,
+                                                   scenario.misalignment))(params, on)
+        rails = state[2] if support == "flexible" else None
+        results[support] = {name: profile_model(model, vehicle, params, on, state[0],
+                                                state[1], rails, args.calls, args.batch)
+                            for name, model in models.items()}
+        ratios["online_over_table"][support] = round(
+            results[support]["online"]["rhs_median_us"]
+            / results[support]["table"]["rhs_median_us"], 2)
+    if len(results) == 2:
+        ratios["flexible_over_rigid"] = {name: round(
+            results["flexible"][name]["rhs_median_us"] / results["rigid"][name]["rhs_median_us"],
+            2) for name in models}
+    table = {key: table_info[key] for key in
+             ("build_time_s", "cached", "nodes", "level_misses", "path") if key in table_info}
     print(json.dumps({
         "benchmark": "rhs_profile", "scenario": scenario.name, "calls": args.calls,
-        **results, **ratio, "load": os.getloadavg(), "jnp_dtype": str(jnp.zeros(1).dtype),
+        **results, "table": table, **ratios, "load": os.getloadavg(),
+        "jnp_dtype": str(jnp.zeros(1).dtype),
     }, indent=2))
 
 

@@ -1,10 +1,12 @@
 """Monte Carlo study: the bogie entering the paper's 300 m curve (shortened) over speed
 10-25 m/s and initial misalignment 0-5 mm (docs/montecarlo.md), on the ideal track or,
 with ``--irregularities SPECTRUM``, on realisations of that spectrum (3-150 m), the
-realisation's seed drawn as a third input.
+realisation's seed drawn as a third input; with ``--flexible`` on the co-moving
+flexible track (``bogie-curve-flexible.toml``) instead of rigid rails.
 
 ``python experiments/montecarlo_speed_misalignment/run.py OUT [--samples 128]
-[--chunk 64] [--seed 2026] [--host-devices 2] [--irregularities german-low]`` writes
+[--chunk 64] [--seed 2026] [--host-devices 2] [--irregularities german-low]
+[--flexible]`` writes
 into OUT the table (CSV and Parquet), the statistics (JSON) and the figures (maps over
 speed and misalignment, distributions); each chunk is split over the host devices (one
 per core here). Finished chunks are kept in OUT/table.chunks.json: the same command
@@ -34,6 +36,8 @@ def main():
     parser.add_argument("--duration", type=float, help="[s] (default: the scenario's 1.5 s)")
     parser.add_argument("--host-devices", type=int, default=2)
     parser.add_argument("--irregularities", help="an irregularity spectrum, e.g. german-low")
+    parser.add_argument("--flexible", action="store_true",
+                        help="on the co-moving flexible track (bogie-curve-flexible.toml)")
     args = parser.parse_args()
     use_host_devices(args.host_devices)  # before anything starts JAX's devices
     enable_float64()
@@ -43,7 +47,8 @@ def main():
     from jaxrail.scenarios.irregularities import IrregularitySpec
 
     args.out.mkdir(parents=True, exist_ok=True)
-    scenario = load_scenario(HERE / "bogie-curve.toml")
+    path = HERE / ("bogie-curve-flexible.toml" if args.flexible else "bogie-curve.toml")
+    scenario = load_scenario(path)
     vary = VARY
     if args.irregularities:
         scenario = dataclasses.replace(scenario, irregularities=IrregularitySpec(
@@ -62,7 +67,7 @@ def main():
     plot_distributions(table, args.out / "distributions.png")
     duration = scenario.duration if args.duration is None else args.duration
     ok = table["status"] == "successful"
-    stats = {"scenario": str(HERE / "bogie-curve.toml"), "vary": vary,
+    stats = {"scenario": str(path), "vary": vary,
              "irregularities": args.irregularities,
              "samples": args.samples, "seed": args.seed, "duration_s": duration,
              "statuses": mc.statuses, "chunk": mc.chunk, "devices": mc.devices,
