@@ -7,11 +7,14 @@ on UIC60 1:20 rolling at 10 m/s:
    normal-contact spring and damper (eq. 17 at rest), on the rail mass on its support;
 3. a wheelset dropped onto the rails: its peak wheel load on rigid rails is Hertz's
    impact (the energy of the fall stored in the Hertz spring), on the flexible track
-   the series-spring estimate (stored in the Hertz spring and the support in series).
+   the series-spring estimate (stored in the Hertz spring and the support in series);
+4. the gradient of a run in the support's stiffness against central differences.
 """
 
 from pathlib import Path
 
+import diffrax
+import equinox as eqx
 import jax
 import jax.flatten_util
 import jax.numpy as jnp
@@ -22,7 +25,7 @@ from scipy.optimize import brentq
 from jaxrail.multibody import rhs
 from jaxrail.multibody.imex import _pack, _unpack
 from jaxrail.scenarios import parse_scenario
-from jaxrail.simulation import SolverOptions, simulate
+from jaxrail.simulation import SolverOptions, simulate, solve
 from jaxrail.track.flexible import FlexibleTrack
 from jaxrail.vehicles.initial import initial_state
 from jaxrail.vehicles.loads import OnlineContact, VehicleLoads
@@ -186,3 +189,31 @@ def test_peak_load_of_a_dropped_wheelset(wheelset, flexible):
     low, high = sorted([estimate(at_rest), estimate(normal / depth**1.5)])
     print(f"\npeak {peak:.0f} N, estimates {low:.0f} to {high:.0f} N")
     assert 0.99 * low < peak < 1.01 * high
+
+
+def test_gradient_of_a_run_in_the_support_stiffness_matches_central_differences(wheelset):
+    """Forward mode through 0.02 s of fixed steps from the rest state in the rails'
+    vertical support stiffness (the rails start at the default stiffness's rest
+    deflection, so a changed stiffness sets them moving), against central differences
+    of the run alone."""
+    vehicle, params, track, state = wheelset
+    stiffness = float(track.support.stiffness[1])
+    options = SolverOptions(fixed_step=2e-4, max_steps=101, n_outputs=11)
+
+    def output(scale):
+        moved = eqx.tree_at(lambda t: t.support.stiffness, track,
+                            track.support.stiffness.at[1].set(stiffness * scale))
+        result = solve(vehicle, params, moved, 0.02, SPEED, initial=state, options=options,
+                       adjoint=diffrax.ForwardMode())
+        # the left rail's mean vertical deflection, the wheelset's mean height
+        return jnp.stack([jnp.mean(result.rail_deflection[:, 0, 0, 1]),
+                          jnp.mean(result.wheelset_vertical)])
+
+    slopes = jax.jit(lambda k: jax.jvp(output, (k,), (jnp.ones_like(k),))[1])(jnp.asarray(1.0))
+    values = jax.jit(output)
+    h = 1e-5
+    central = (np.asarray(values(jnp.asarray(1.0 + h)))
+               - np.asarray(values(jnp.asarray(1.0 - h)))) / (2 * h)
+    print("AD", np.asarray(slopes), "FD", central)
+    assert np.all(np.abs(central) > 1e-8)
+    np.testing.assert_allclose(np.asarray(slopes), central, rtol=1e-4)
