@@ -333,28 +333,10 @@ def _as_state(track, initial):
     return initial if flexible else initial + (None,)
 
 
-def _solve_states(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignment,
-                  s0, options, limits, solver, adjoint, initial, contact_model):
-    """The integration of :func:`solve`: ``(q0, qdot0, rails0)`` and the arguments of
-    :func:`_results` after them (output times, states, result code, derailed, step
-    counts)."""
-    limits = DerailmentLimits() if limits is None else limits
-    loads = VehicleLoads(vehicle, params, track, resolve_contact_model(contact_model))
-    q0, qdot0, rails0 = _start(vehicle, params, track, speed, misalignment, s0, initial,
-                               loads.model)
-    lateral0, _, _, rest_heights, irregularity0 = _wheelset_track_coordinates(vehicle, track,
-                                                                              q0, qdot0)
-    ts = jnp.linspace(0.0, t1, options.n_outputs)
-    sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
-                     options.controller()[1], options, limits, solver, adjoint, rails0)
-    q, qdot, rails = sol.ys[0], sol.ys[1], (None if rails0 is None else sol.ys[2])
-    # a state that only turned non-finite is not derailed: diffrax's event_occurred
-    # result makes the status "failed"
-    derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, irregularity0,
-                                                    misalignment)
-    return ((q0, qdot0, rails0), (sol.ts, q, qdot, rails, sol.result, derailed,
-                                  sol.stats["num_steps"], sol.stats["num_accepted_steps"],
-                                  sol.stats["num_rejected_steps"]))
+def _saved_states(sol, rails0):
+    """The states (q, qdot, rails) diffrax saved: ``rails`` None on rigid rails
+    (``rails0`` None)."""
+    return sol.ys[0], sol.ys[1], (None if rails0 is None else sol.ys[2])
 
 
 def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignment=0.0,
@@ -370,10 +352,23 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
     (default the paper's search). ``options.progress`` is not used here
     (:func:`simulate` draws the bar). ``limits``: :class:`DerailmentLimits` (default
     ones)."""
-    start, outputs = _solve_states(vehicle, params, track, t1, speed, misalignment, s0,
-                                   options, limits, solver, adjoint, initial, contact_model)
-    return _results(vehicle, params, track, resolve_contact_model(contact_model), *start,
-                    *outputs)
+    limits = DerailmentLimits() if limits is None else limits
+    loads = VehicleLoads(vehicle, params, track, resolve_contact_model(contact_model))
+    q0, qdot0, rails0 = _start(vehicle, params, track, speed, misalignment, s0, initial,
+                               loads.model)
+    lateral0, _, _, rest_heights, irregularity0 = _wheelset_track_coordinates(vehicle, track,
+                                                                              q0, qdot0)
+    ts = jnp.linspace(0.0, t1, options.n_outputs)
+    sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
+                     options.controller()[1], options, limits, solver, adjoint, rails0)
+    # a state that only turned non-finite is not derailed: diffrax's event_occurred
+    # result makes the status "failed"
+    derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, irregularity0,
+                                                    misalignment)
+    return _results(vehicle, params, track, loads.model, q0, qdot0, rails0, sol.ts,
+                    *_saved_states(sol, rails0), sol.result, derailed,
+                    sol.stats["num_steps"], sol.stats["num_accepted_steps"],
+                    sol.stats["num_rejected_steps"])
 
 
 def _segment(vehicle, params, track, state, rest_heights, started_derailed, t0, t1, ts,
@@ -387,8 +382,7 @@ def _segment(vehicle, params, track, state, rest_heights, started_derailed, t0, 
     sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t0, t1, ts,
                      dt0, options, limits, solver, None, rails0)
     derailed = sol.event_mask[0] | started_derailed
-    states = (sol.ys[0], sol.ys[1], None if rails0 is None else sol.ys[2])
-    return (states, sol.result, derailed, sol.stats["num_steps"],
+    return (_saved_states(sol, rails0), sol.result, derailed, sol.stats["num_steps"],
             sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
 
 

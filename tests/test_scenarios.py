@@ -137,6 +137,18 @@ BAD_INPUTS = [
     (("[vehicle]", "[vehicle]\nwheelbase = 2.5"), "unknown key 'wheelbase' in [vehicle]"),
     (('rail = "uic60"', 'rail = "uic60"\ninclination = 40'),
      "[vehicle] inclination must be a string, got 40"),
+    # [track] flexible: true, false or a table of [lateral, vertical] values
+    (("length = 100.0 }]", 'length = 100.0 }]\nflexible = "yes"'),
+     "bad.toml: [track] flexible must be true, false or a table of mass, stiffness and "
+     "damping, got 'yes'"),
+    (("length = 100.0 }]", "length = 100.0 }]\nflexible = { stiffness = [5e7] }"),
+     "bad.toml: [track] flexible: stiffness must be [lateral, vertical], got [50000000.0]"),
+    (("length = 100.0 }]", "length = 100.0 }]\nflexible = { mass = [165.0, -165.0] }"),
+     "bad.toml: [track] flexible: mass must be within [1, 10000] kg, got -165.0"),
+    (("length = 100.0 }]", 'length = 100.0 }]\nflexible = { damping = [1e5, "soft"] }'),
+     "bad.toml: [track] flexible: damping must be a number [N s/m], got 'soft'"),
+    (("length = 100.0 }]", "length = 100.0 }]\nflexible = { stifness = [5e7, 7.5e7] }"),
+     "unknown key 'stifness' in [track] flexible (did you mean 'stiffness'?)"),
 ]
 
 # Entries whose values are only known wrong when the scenario is built (profiles by name
@@ -168,6 +180,16 @@ def test_bad_scenarios_are_named(change, message):
     assert text != MINIMAL
     with pytest.raises(ValueError, match=re.escape(message)):
         parse_scenario(text, "bad.toml")
+
+
+def test_flexible_track_values_reach_the_track():
+    text = MINIMAL.replace("length = 100.0 }]", "length = 100.0 }]\nflexible = { stiffness = "
+                           "[4e7, 6e7] }")
+    _, _, track = parse_scenario(text, "flex.toml").build()
+    np.testing.assert_array_equal(np.asarray(track.support.stiffness), [4e7, 6e7])
+    assert float(track.support.mass[1]) == 165.0  # the default where none is given
+    assert parse_scenario(MINIMAL.replace("length = 100.0 }]", "length = 100.0 }]\n"
+                                          "flexible = false")).build()[2].support is None
 
 
 def test_unknown_scenario_lists_the_builtin_ones():

@@ -90,11 +90,8 @@ class Scenario:
                 **{k: v for k, v in s.items() if k != "kind"}) for s in self.segments])
         except ValueError as error:
             raise ValueError(f"{self.source}: [track] segments: {error}") from error
-        if self.flexible is not None:
-            try:
-                track = track.with_support(FlexibleTrack(**self.flexible).checked())
-            except ValueError as error:
-                raise ValueError(f"{self.source}: [track] flexible: {error}") from error
+        if self.flexible is not None:  # its values checked when the file was read
+            track = track.with_support(FlexibleTrack(**self.flexible))
         if self.irregularities is None:
             return track
         try:

@@ -22,10 +22,7 @@ creepages and penetration rate use the rail's velocity (:mod:`jaxrail.vehicles.l
 
 import equinox as eqx
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array, Float
-
-DIRECTIONS = ("lateral", "vertical")
 
 # Defaults, one value per direction (lateral, vertical); sources in docs/track.md.
 # Vertical: DLR's co-moving track (AdvancedNoise SimpleRailwayTrack): 165 kg on
@@ -54,21 +51,6 @@ class FlexibleTrack(eqx.Module):
     stiffness: Float[Array, "2"] = eqx.field(converter=_f64, default=DEFAULT_STIFFNESS)
     damping: Float[Array, "2"] = eqx.field(converter=_f64, default=DEFAULT_DAMPING)
 
-    def checked(self) -> "FlexibleTrack":
-        """This support, or a ValueError naming the value that is not a positive
-        finite number (damping may be 0); host values, before anything compiles."""
-        for name in ("mass", "stiffness", "damping"):
-            value = np.asarray(getattr(self, name))
-            if value.shape != (2,):
-                raise ValueError(f"flexible track {name} must have 2 values (lateral, "
-                                 f"vertical), got shape {value.shape}")
-            low_ok = value >= 0.0 if name == "damping" else value > 0.0
-            if not np.all(np.isfinite(value) & low_ok):
-                sign = ">= 0" if name == "damping" else "> 0"
-                raise ValueError(f"flexible track {name} must be finite and {sign}, got "
-                                 f"{value.tolist()}")
-        return self
-
     def accelerations(self, deflection, rate, rail_force):
         """``w''`` [m/s^2] of rails at ``deflection`` [m] and ``rate`` [m/s] under the
         wheels' ``rail_force`` [N], all (..., 2) (lateral, vertical)."""
@@ -78,8 +60,3 @@ class FlexibleTrack(eqx.Module):
         """The rest deflection [m] under a constant ``rail_force`` [N] (..., 2)."""
         return rail_force / self.stiffness
 
-
-def rest_state(n_wheelsets: int):
-    """Zero deflections and rates, each (W, 2, 2)."""
-    zero = jnp.zeros((n_wheelsets, 2, 2), dtype=jnp.float64)
-    return zero, zero

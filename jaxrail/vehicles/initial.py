@@ -32,18 +32,25 @@ MAX_ROLL = 0.02  # [rad]
 STEP = 1e-8  # central-difference step in height [m] and roll [rad] of the Newton step
 
 
-def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed, model):
-    """Upward wheel-rail forces [N] (2,) (left, right wheel; track normal) on a wheelset
-    at ``s`` [m], shifted ``lateral`` [m], its centre ``height`` [m] above the track
-    plane, rolled by ``roll`` [rad], moving at ``speed`` [m/s] and spinning at speed /
-    nominal radius (the spin creepage of the coned contact gives lateral creep forces
-    with a vertical component), and the mid-overlap rolling radius [m] weighted by
-    normal force."""
+def _wheelset_contact(vehicle, params, track, s, lateral, height, roll, speed, model):
+    """``(patches, patch_forces)`` of a wheelset at ``s`` [m], shifted ``lateral`` [m],
+    its centre ``height`` [m] above the track plane, rolled by ``roll`` [rad], moving at
+    ``speed`` [m/s] and spinning at speed / nominal radius (the spin creepage of the
+    coned contact gives lateral creep forces with a vertical component)."""
     position, rotation = wheelset_pose(track, s, lateral, height, roll)
     velocity = speed * rotation[:, 0]
     spin = (speed / params.nominal_radius) * rotation[:, 1]
     _, _, patches, forces = wheelset_loads(vehicle, params, track, position, rotation,
                                            velocity, spin, model)
+    return patches, forces
+
+
+def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed, model):
+    """Upward wheel-rail forces [N] (2,) (left, right wheel; track normal) on the
+    wheelset of :func:`_wheelset_contact`, and the mid-overlap rolling radius [m]
+    weighted by normal force."""
+    patches, forces = _wheelset_contact(vehicle, params, track, s, lateral, height, roll,
+                                        speed, model)
     up = track_frame(track, s)[:, 2]
     loads = jnp.sum(forces.force @ up, axis=1)
     weight = jnp.where(patches.active, forces.normal_force, 0.0)
@@ -156,15 +163,15 @@ def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalig
     load = -jnp.sum(mass) * params.system.gravity[2] / len(wheelsets)
     alignment = lambda s: track_irregularity(track, s)[0]  # noqa: E731
     stations = s0 + layout[wheelsets, 0]
-    rest = lambda under, s: wheelset_rest_pose(  # noqa: E731
-        vehicle, params, under, s, misalignment + alignment(s), load, speed, model)
+    shift = lambda s: misalignment + alignment(s)  # noqa: E731
     rails = None
     if track.support is None:
-        heights, rolls, radii = jax.vmap(lambda s: rest(track, s))(stations)
+        heights, rolls, radii = jax.vmap(lambda s: wheelset_rest_pose(
+            vehicle, params, track, s, shift(s), load, speed, model))(stations)
     else:
-        heights, rolls, radii, rails = _rest_on_flexible_rails(vehicle, params, track, rest,
-                                                               stations, misalignment,
-                                                               load, speed, model)
+        heights, rolls, radii, rails = _rest_on_flexible_rails(vehicle, params, track,
+                                                               stations, shift, load, speed,
+                                                               model)
     lift = jnp.mean(heights) - params.nominal_radius
 
     # per body: its own wheelset (wheelsets and axleboxes), or -1
@@ -195,33 +202,28 @@ REST_PASSES = 2
 loads, the second on rails also moved sideways by the first pose's lateral forces."""
 
 
-def _rest_on_flexible_rails(vehicle, params, track, rest, stations, misalignment, load,
-                            speed, model):
-    """Rest poses (heights, rolls, radii (W,)) of the wheelsets at ``stations`` [m] on
-    rails deflected by their wheels' static forces, and the rails' rest state ``(w,
-    zeros)`` (W, 2, 2) [m, m/s] (:mod:`jaxrail.track.flexible`). The vertical deflection
-    is exact (each wheel carries ``load / 2`` [N] by construction); the lateral one is
-    that of the previous pass's forces (:data:`REST_PASSES`)."""
+def _rest_on_flexible_rails(vehicle, params, track, stations, shift, load, speed, model):
+    """Rest poses (heights, rolls, radii (W,)) of the wheelsets at ``stations`` [m],
+    shifted ``shift(s)`` [m], on rails deflected by their wheels' static forces, and the
+    rails' rest state ``(w, zeros)`` (W, 2, 2) [m, m/s] (:mod:`jaxrail.track.flexible`).
+    The vertical deflection is exact (each wheel carries ``load / 2`` [N] by
+    construction); the lateral one is that of the previous pass's forces
+    (:data:`REST_PASSES`)."""
     support = track.support
     pressed = jnp.zeros((2, 2)).at[:, 1].set(-0.5 * load)  # each wheel's load on its rail
-
-    def rail_forces(under, s, height, roll):
-        position, rotation = wheelset_pose(under, s, misalignment + track_irregularity(
-            track, s)[0], height, roll)
-        velocity = speed * rotation[:, 0]
-        spin = (speed / params.nominal_radius) * rotation[:, 1]
-        _, _, patches, forces = wheelset_loads(vehicle, params, under, position, rotation,
-                                               velocity, spin, model)
-        return rail_loads(track, patches, forces)
 
     def one(s):
         w = support.static_deflection(pressed)  # (2 rails, 2 directions)
         for _ in range(REST_PASSES - 1):
             under = track.under_wheelset(w)
-            height, roll, _ = rest(under, s)
-            lateral = support.static_deflection(rail_forces(under, s, height, roll))[:, 0]
-            w = w.at[:, 0].set(lateral)
-        height, roll, radius = rest(track.under_wheelset(w), s)
+            height, roll, _ = wheelset_rest_pose(vehicle, params, under, s, shift(s), load,
+                                                 speed, model)
+            patches, forces = _wheelset_contact(vehicle, params, under, s, shift(s), height,
+                                                roll, speed, model)
+            w = w.at[:, 0].set(support.static_deflection(rail_loads(track, patches,
+                                                                    forces))[:, 0])
+        height, roll, radius = wheelset_rest_pose(vehicle, params, track.under_wheelset(w), s,
+                                                  shift(s), load, speed, model)
         return height, roll, radius, w
 
     heights, rolls, radii, w = jax.vmap(one)(stations)

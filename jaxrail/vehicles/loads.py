@@ -174,10 +174,9 @@ def wheelset_load_jacobian(contact: ContactParameters, patches, q_body, qdot_bod
     d_velocity = jnp.concatenate([z3, z4, zx, eye, z4, zx], axis=1)
     d_omega = jnp.concatenate([z3, omega_of_p, zx, z3, 2.0 * e, zx], axis=1)
     velocity, omega = qdot_body[:3], 2.0 * e @ pdot
-    if rails is None:
-        one = lambda patch: patch_force_jacobian(contact, patch, r, velocity, omega,  # noqa: E731
-                                                 d_shift, d_turn, d_velocity, d_omega)
-        d_forces = jax.vmap(jax.vmap(one))(patches)  # (2, P, 3, 14)
+    if rails is None:  # rigid rails: they neither move nor depend on anything
+        rail_velocity = jnp.zeros((2, 3))
+        d_rail_shift = d_rail_velocity = jnp.zeros((2, 3, 14))
     else:
         # rail (side, direction) k moves along axes[side, direction]: columns 7 + k, 18 + k
         unit = jnp.eye(4).reshape(2, 2, 4)
@@ -187,12 +186,12 @@ def wheelset_load_jacobian(contact: ContactParameters, patches, q_body, qdot_bod
         d_rail_velocity = jnp.concatenate([zero, 0.0 * shifts, zero, shifts], axis=2)
         rail_velocity = jnp.einsum("sd,sdi->si", rails[1], axes)
 
-        def side(patch_row, v_rail, d_shift_rail, d_velocity_rail):
-            one = lambda patch: patch_force_jacobian(  # noqa: E731
-                contact, patch, r, velocity, omega, d_shift, d_turn, d_velocity, d_omega,
-                v_rail, d_shift_rail, d_velocity_rail)
-            return jax.vmap(one)(patch_row)
-        d_forces = jax.vmap(side)(patches, rail_velocity, d_rail_shift, d_rail_velocity)
+    def side(patch_row, v_rail, d_shift_rail, d_velocity_rail):
+        one = lambda patch: patch_force_jacobian(  # noqa: E731
+            contact, patch, r, velocity, omega, d_shift, d_turn, d_velocity, d_omega,
+            v_rail, d_shift_rail, d_velocity_rail)
+        return jax.vmap(one)(patch_row)
+    d_forces = jax.vmap(side)(patches, rail_velocity, d_rail_shift, d_rail_velocity)
     arms = patches.rail_point - r
     d_moment = jnp.sum(jnp.cross(arms[..., :, None], d_forces, axisa=-2, axisb=-2, axisc=-2),
                        axis=(0, 1))

@@ -148,7 +148,7 @@ def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_ve
 
 def patch_force_jacobian(params: ContactParameters, patch, centre, velocity,
                          angular_velocity, d_shift, d_turn, d_velocity, d_angular_velocity,
-                         rail_velocity=None, d_rail_shift=None, d_rail_velocity=None):
+                         rail_velocity, d_rail_shift, d_rail_velocity):
     """d force / d x (3, m): the global force on the wheel at one patch as m
     quantities x of the wheelset change, the patch's points, frame and curvatures
     held.
@@ -161,14 +161,10 @@ def patch_force_jacobian(params: ContactParameters, patch, centre, velocity,
     differentiated in their six scalar inputs only (penetration, rate, creepages,
     rolling speed), so the cost does not grow with m.
 
-    On a flexible track the rail under the patch moves at ``rail_velocity`` (3,)
-    [m/s], and ``d_rail_shift``, ``d_rail_velocity`` (3, m) are the derivatives of its
-    displacement [m] and velocity [m/s] (default: a rigid rail)."""
+    The rail under the patch moves at ``rail_velocity`` (3,) [m/s], and
+    ``d_rail_shift``, ``d_rail_velocity`` (3, m) are the derivatives of its displacement
+    [m] and velocity [m/s] (all zeros for a rigid rail)."""
     unit, stiffness = _patch_hertz(params, patch)
-    zero = jnp.zeros_like(d_shift)
-    rail_velocity = jnp.zeros(3) if rail_velocity is None else rail_velocity
-    d_rail_shift = zero if d_rail_shift is None else d_rail_shift
-    d_rail_velocity = zero if d_rail_velocity is None else d_rail_velocity
     arm = patch.wheel_point - centre
     moved = d_shift + jnp.cross(d_turn.T, arm).T - d_rail_shift
     d_penetration = -(patch.normal @ moved)
