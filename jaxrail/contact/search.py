@@ -19,6 +19,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
+from .._tracing import traced_once
 from ..profiles._base import Profile, WheelProfile
 from ..track.rails import lateral_from_centre, rail_under_wheel, wheel_origin
 from .patches import (SECANT_SPAN, find_patches, overlap_density, refine_maximum, secant_curvature,
@@ -258,6 +259,7 @@ def search_wheel_parts(wheel: WheelProfile, rail: Profile, track, rail_offset, w
     return ContactPatches(**data), located
 
 
+@traced_once
 def deepest_depth(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelset_position,
                   wheelset_rotation, side, config: SearchConfig = SearchConfig(), s_guess=None):
     """Largest signed depth [m] of a wheel into its rail over all strips and surfaces,
@@ -270,6 +272,7 @@ def deepest_depth(wheel: WheelProfile, rail: Profile, track, rail_offset, wheels
     return jnp.max(jnp.stack(depths))
 
 
+@traced_once
 def search_wheelset(wheel, rail, track, rail_offset, wheelset_position, wheelset_rotation,
                     config: SearchConfig = SearchConfig(), s_guess=None) -> ContactPatches:
     """Both wheels of a wheelset; leading shape ``(2, P)`` ordered (left, right)."""

@@ -34,6 +34,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from .._tracing import traced_once
 from . import quaternion as qt
 from ._values import checked_vector, float64_array
 from .joints import _check_frame, body_selector, ground_extended, place_bodies, select_bodies
@@ -320,6 +321,7 @@ def _one_element(kind, qi, qj, vi, vj, e):
     return gi, gj
 
 
+@traced_once
 def element_forces(kind: str, body_i, body_j, e, q, qdot) -> Float[Array, " 7n"]:
     """Summed generalized forces (7 n,) of the k elements of one kind.
 

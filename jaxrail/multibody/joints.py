@@ -32,6 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from .._tracing import traced_once
 from . import quaternion as qt
 from .bodies import D, X_I, X_J, Y_I, Y_J, Z_I, Jet, pair_dots, pair_kinematics
 
@@ -234,6 +235,7 @@ def place_bodies(selector, blocks) -> Array:
     return s * blocks[..., None, :]
 
 
+@traced_once
 def joint_terms(kind: str, body_i, body_j, jp: JointParams, q, qdot):
     """Phi, Phi_q, Phidot, gamma of the k joints of one kind (stacked, joint-major).
 

@@ -22,6 +22,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
+from .._tracing import traced_once
 from ..contact.creepage import creepages
 from ..contact.hertz import hertz_from_curvatures
 from ..contact.normal import Eq17, NormalLaw
@@ -146,6 +147,7 @@ def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_ve
     return PatchForces(normal_force, fx, fy, xi, eta, phi, a, b, stiffness, force)
 
 
+@traced_once
 def patch_force_jacobian(params: ContactParameters, patch, centre, velocity,
                          angular_velocity, d_shift, d_turn, d_velocity, d_angular_velocity,
                          rail_velocity, d_rail_shift, d_rail_velocity):
@@ -181,6 +183,7 @@ def patch_force_jacobian(params: ContactParameters, patch, centre, velocity,
     return patch.frame[:, jnp.array([2, 0, 1])] @ d_laws
 
 
+@traced_once
 def patch_loads(params: ContactParameters, patches, position, velocity, angular_velocity,
                 rail_velocity=None):
     """Total wheel-rail force and moment on a wheelset from its contact patches.

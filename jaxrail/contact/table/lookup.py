@@ -6,6 +6,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..._tracing import traced_once
 from ...track.rails import lateral_from_centre, rail_under_wheel, wheel_origin
 from ..patches import wide_point
 from ..search import ContactPatches, contact_geometry
@@ -67,6 +68,7 @@ def _along_levels(heights, fields, vertical, levels):
     return depth, geometry
 
 
+@traced_once
 def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset_position,
                   wheelset_rotation, side) -> ContactPatches:
     """Contact patches of one wheel from ``table`` instead of the search: the same
