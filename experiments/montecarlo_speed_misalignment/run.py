@@ -6,7 +6,7 @@ flexible track (``bogie-curve-flexible.toml``) instead of rigid rails.
 
 ``python experiments/montecarlo_speed_misalignment/run.py OUT [--samples 128]
 [--chunk 64] [--seed 2026] [--host-devices 2] [--irregularities german-low]
-[--flexible]`` writes
+[--flexible [--rigid-rails]] [--contact table]`` writes
 into OUT the table (CSV and Parquet), the statistics (JSON) and the figures (maps over
 speed and misalignment, distributions); each chunk is split over the host devices (one
 per core here). Finished chunks are kept in OUT/table.chunks.json: the same command
@@ -38,6 +38,11 @@ def main():
     parser.add_argument("--irregularities", help="an irregularity spectrum, e.g. german-low")
     parser.add_argument("--flexible", action="store_true",
                         help="on the co-moving flexible track (bogie-curve-flexible.toml)")
+    parser.add_argument("--rigid-rails", action="store_true",
+                        help="with --flexible: the same scenario and solver on rigid rails "
+                             "(the flexible study's comparison)")
+    parser.add_argument("--contact", choices=("online", "table"),
+                        help="the contact model (default: the scenario's, the search)")
     args = parser.parse_args()
     use_host_devices(args.host_devices)  # before anything starts JAX's devices
     enable_float64()
@@ -49,6 +54,12 @@ def main():
     args.out.mkdir(parents=True, exist_ok=True)
     path = HERE / ("bogie-curve-flexible.toml" if args.flexible else "bogie-curve.toml")
     scenario = load_scenario(path)
+    if args.rigid_rails and not args.flexible:
+        parser.error("--rigid-rails goes with --flexible")
+    if args.rigid_rails:
+        scenario = dataclasses.replace(scenario, flexible=None)
+    if args.contact:
+        scenario = dataclasses.replace(scenario, contact=args.contact)
     vary = VARY
     if args.irregularities:
         scenario = dataclasses.replace(scenario, irregularities=IrregularitySpec(
@@ -68,7 +79,8 @@ def main():
     duration = scenario.duration if args.duration is None else args.duration
     ok = table["status"] == "successful"
     stats = {"scenario": str(path), "vary": vary,
-             "irregularities": args.irregularities,
+             "irregularities": args.irregularities, "contact": scenario.contact,
+             "support": "rigid" if scenario.flexible is None else "flexible",
              "samples": args.samples, "seed": args.seed, "duration_s": duration,
              "statuses": mc.statuses, "chunk": mc.chunk, "devices": mc.devices,
              "compile_time_s": mc.compile_time_s, "run_time_s": mc.run_time_s,
