@@ -44,6 +44,8 @@ def main():
     parser.add_argument("--contact", choices=("online", "table"),
                         help="the contact model (default: the scenario's, the search)")
     args = parser.parse_args()
+    if args.rigid_rails and not args.flexible:
+        parser.error("--rigid-rails goes with --flexible")
     use_host_devices(args.host_devices)  # before anything starts JAX's devices
     enable_float64()
     from jaxrail.montecarlo import run_montecarlo, write_table
@@ -54,8 +56,6 @@ def main():
     args.out.mkdir(parents=True, exist_ok=True)
     path = HERE / ("bogie-curve-flexible.toml" if args.flexible else "bogie-curve.toml")
     scenario = load_scenario(path)
-    if args.rigid_rails and not args.flexible:
-        parser.error("--rigid-rails goes with --flexible")
     if args.rigid_rails:
         scenario = dataclasses.replace(scenario, flexible=None)
     if args.contact:
