@@ -39,6 +39,7 @@ import jax
 
 from ._files import cache_root
 from ._program_cache import compile_through_program_cache
+from ._time_report import register as register_time_report
 
 _CPU_OPTIONS = {
     "xla_cpu_scheduler_type": "CPU_SCHEDULER_TYPE_MEMORY_OPTIMIZED",
@@ -95,6 +96,7 @@ def compile_function(function, *args, **kwargs):
     Python function: through the traced-program cache of :mod:`jaxrail._program_cache`
     (single-device programs). Returns the compiled callable."""
     use_persistent_cache()
+    register_time_report()  # a program loaded from a cache may report its time
     with _checks_as_nan():
         if hasattr(function, "lower"):
             return function.lower(*args, **kwargs).compile(compiler_options())

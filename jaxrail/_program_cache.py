@@ -32,6 +32,7 @@ import jax
 from jax import export
 
 from ._files import write_atomically
+from ._time_report import TARGET as TIME_REPORT_TARGET
 
 _PACKAGES = ("numpy", "jax", "jaxlib", "equinox", "diffrax", "optimistix", "lineax")
 _UNSAFE = (" at 0x", "...")
@@ -131,7 +132,10 @@ def compile_through_program_cache(function, folder, xla_options, /, *args, **kwa
             skeleton.append(jax.tree.map(lambda x: jax.ShapeDtypeStruct(x.shape, x.dtype), out))
             return jax.tree.leaves(out)
 
-        exported = export.export(jax.jit(flat))(
+        # jaxrail's own FFI target (the progress report) is registered by every
+        # process that loads the program (jaxrail._compiler)
+        exported = export.export(jax.jit(flat), disabled_checks=[
+            export.DisabledSafetyCheck.custom_call(TIME_REPORT_TARGET)])(
             *(jax.ShapeDtypeStruct(x.shape, x.dtype) for x in arrays))
         loaded = exported, skeleton[0]
         if path is not None:

@@ -1,9 +1,9 @@
 """A progress bar of simulated seconds with the real-time factor.
 
 A railway engineer waiting for a 41 s run wants to read "12.3/41 s simulated, 0.7 x
-real time", not a percentage. :func:`jaxrail.simulate` draws it from the host between
-segments of the run (each a call of one compiled program), so the compiled programs
-hold no host callback and can be kept in JAX's persistent compilation cache.
+real time", not a percentage. :func:`jaxrail.simulate` draws it while its one
+compiled program runs, from the times the program's loop reports
+(:mod:`jaxrail._time_report`).
 """
 
 _FORMAT = "{n:.2f}/{total:.2f} s simulated |{bar}| [{elapsed}<{remaining}{postfix}]"
@@ -18,10 +18,6 @@ class SimulatedTimeBar:
         import tqdm
 
         self._bar = tqdm.tqdm(total=float(duration), bar_format=_FORMAT, dynamic_ncols=True)
-
-    def restart(self):
-        """Count the elapsed time (and the real-time factor) from now."""
-        self._bar.reset(total=self._bar.total)
 
     def update(self, simulated: float):
         self._bar.n = float(simulated)

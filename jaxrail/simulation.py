@@ -28,6 +28,7 @@ import numpy as np
 from ._compiler import compile_function
 from ._lru import LruCache
 from ._progress import SimulatedTimeBar
+from ._time_report import listening, report_time
 from .multibody import constraints, simulate_system
 from .multibody.imex import IMEX
 from .track import to_track_coordinates, track_frame
@@ -181,14 +182,18 @@ class SimulationResult(eqx.Module):
 
     @property
     def status(self) -> str:
-        """"successful", "derailed", "max_steps_reached", or "failed: <diffrax message>"
-        (host only, for an unbatched result)."""
+        """"successful", "derailed", "max_steps_reached", "failed: singular implicit
+        solve" (the IMEX step's matrix was not finite or singular) or "failed" (a state
+        that turned non-finite, or another diffrax failure) (host only, for an unbatched
+        result)."""
         if bool(self.derailed):
             return "derailed"
         if self.result == diffrax.RESULTS.successful:
             return "successful"
         if self.result == diffrax.RESULTS.max_steps_reached:
             return "max_steps_reached"
+        if self.result == diffrax.RESULTS.singular:
+            return "failed: singular implicit solve"
         return "failed"
 
     @property
@@ -217,9 +222,13 @@ def _wheelset_track_coordinates(vehicle, track, q, qdot):
     return jax.vmap(one)(position, rotation)
 
 
-def _stop_events(vehicle, track, limits, rest_height):
-    """The terminating diffrax Event of a run: (derailed, non-finite state)."""
+def _stop_events(vehicle, track, limits, rest_height, report=False):
+    """The terminating diffrax Event of a run: (derailed, non-finite state). With
+    ``report`` each step's end time goes to the host (:func:`report_time`), for the
+    progress bar."""
     def derailed(t, y, args, **kwargs):
+        if report:
+            report_time(t)
         q, qdot = y[0], y[1]
         lateral, _, _, heights, irregularity = _wheelset_track_coordinates(vehicle, track, q,
                                                                            qdot)
@@ -262,10 +271,11 @@ def _wheel_outputs(vehicle, params, track, q, qdot, rails, model):
 
 
 def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t0, t1, ts, dt0,
-               options, limits, solver, adjoint, rails0=None):
+               options, limits, solver, adjoint, rails0=None, report=False):
     """diffrax's Solution of eq. (19) from (q0, qdot0) at t0 to t1 [s], saved at ``ts``,
     stopped by the derailment event; ``dt0`` [s]: the first step; ``rails0``: a
-    flexible track's rails ``(w, wdot)`` at t0, integrated with the bodies."""
+    flexible track's rails ``(w, wdot)`` at t0, integrated with the bodies; ``report``:
+    each step's time to the host (:func:`_stop_events`)."""
     controller, _ = options.controller()
     return simulate_system(
         vehicle.system, params.system, q0, qdot0, t1, t0=t0, dt0=dt0,
@@ -273,7 +283,7 @@ def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t0, t1, t
         solver=options.solver() if solver is None else solver,
         external=loads, max_steps=options.max_steps, adjoint=adjoint, throw=False,
         stepsize_controller=controller,
-        event=_stop_events(vehicle, track, limits, rest_heights), states0=rails0)
+        event=_stop_events(vehicle, track, limits, rest_heights, report), states0=rails0)
 
 
 def _results(vehicle, params, track, model, q0, qdot0, rails0, ts, q, qdot, rails, result,
@@ -333,16 +343,19 @@ def _as_state(track, initial):
     return initial if flexible else initial + (None,)
 
 
-def _saved_states(sol, rails0):
-    """The states (q, qdot, rails) diffrax saved: ``rails`` None on rigid rails
-    (``rails0`` None)."""
-    return sol.ys[0], sol.ys[1], (None if rails0 is None else sol.ys[2])
+def _saved_states(sol, start):
+    """The states (q, qdot, rails) diffrax saved, the first output (t = 0) the start
+    ``(q0, qdot0, rails0)`` itself, so that a run stopped at once keeps it; ``rails``
+    None on rigid rails (``rails0`` None)."""
+    first = lambda saved, x0: saved.at[0].set(x0)  # noqa: E731
+    rails = None if start[2] is None else jax.tree.map(first, sol.ys[2], start[2])
+    return first(sol.ys[0], start[0]), first(sol.ys[1], start[1]), rails
 
 
 def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignment=0.0,
           s0=None, options: SolverOptions = SolverOptions(),
           limits: DerailmentLimits | None = None, solver=None, adjoint=None,
-          initial=None, contact_model=None):
+          initial=None, contact_model=None, report_progress=False):
     """The traceable core of :func:`simulate` (jit, vmap and grad it): returns a
     :class:`SimulationResult` without host timings. ``t1`` [s], ``speed`` [m/s] and
     ``misalignment`` [m] may be traced. ``initial``: ``(q0, qdot0)`` (and on a flexible
@@ -351,7 +364,9 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
     are measured from the initial state. ``contact_model``: :mod:`jaxrail.vehicles.loads`
     (default the paper's search). ``options.progress`` is not used here
     (:func:`simulate` draws the bar). ``limits``: :class:`DerailmentLimits` (default
-    ones)."""
+    ones). ``report_progress``: pass each step's time to the host
+    (:mod:`jaxrail._time_report`; it changes no value), as :func:`simulate` does for
+    its progress bar."""
     limits = DerailmentLimits() if limits is None else limits
     loads = VehicleLoads(vehicle, params, track, resolve_contact_model(contact_model))
     q0, qdot0, rails0 = _start(vehicle, params, track, speed, misalignment, s0, initial,
@@ -360,37 +375,21 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
                                                                               q0, qdot0)
     ts = jnp.linspace(0.0, t1, options.n_outputs)
     sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
-                     options.controller()[1], options, limits, solver, adjoint, rails0)
+                     options.controller()[1], options, limits, solver, adjoint, rails0,
+                     report_progress)
     # a state that only turned non-finite is not derailed: diffrax's event_occurred
     # result makes the status "failed"
     derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, irregularity0,
                                                     misalignment)
-    return _results(vehicle, params, track, loads.model, q0, qdot0, rails0, sol.ts,
-                    *_saved_states(sol, rails0), sol.result, derailed,
+    return _results(vehicle, params, track, loads.model, q0, qdot0, rails0, ts,
+                    *_saved_states(sol, (q0, qdot0, rails0)), sol.result, derailed,
                     sol.stats["num_steps"], sol.stats["num_accepted_steps"],
                     sol.stats["num_rejected_steps"])
 
 
-def _segment(vehicle, params, track, state, rest_heights, started_derailed, t0, t1, ts,
-             dt0, options, limits, solver, contact_model):
-    """One segment of a run with a progress bar: from ``state`` = (q0, qdot0, rails0) at
-    t0 to t1 [s], saved at ``ts`` (the last one is t1). Returns the states (q, qdot,
-    rails) at ``ts`` (rails None on rigid rails), diffrax's result code, whether the run
-    derailed (or ``started_derailed``), and the steps taken, accepted and rejected."""
-    loads = VehicleLoads(vehicle, params, track, contact_model)
-    q0, qdot0, rails0 = state
-    sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t0, t1, ts,
-                     dt0, options, limits, solver, None, rails0)
-    derailed = sol.event_mask[0] | started_derailed
-    return (_saved_states(sol, rails0), sol.result, derailed, sol.stats["num_steps"],
-            sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
-
-
-SEGMENTS = 50
-"""A run with a progress bar is integrated in about this many segments."""
 PROGRAMS_KEPT = 32
 """Compiled programs this process keeps (:func:`_compile`); the least recently used
-one goes first (a paper-curve run with a progress bar uses three)."""
+one goes first (a paper-curve run uses two: rest pose and run)."""
 _compiled = LruCache(PROGRAMS_KEPT)
 
 
@@ -421,63 +420,6 @@ class _Timer:
 
     def run(self, function, *args, **kwargs):
         return self.compile(function, *args, **kwargs)(*args, **kwargs)
-
-
-def _segment_outputs(n_outputs):
-    """Per segment, the indices of its output times (the last one is its end); the last
-    segment repeats the final output to keep one shape."""
-    per = -(-(n_outputs - 1) // SEGMENTS)
-    return [np.minimum(np.arange(i, i + per), n_outputs - 1)
-            for i in range(1, n_outputs, per)]
-
-
-def _run_in_segments(timer, vehicle, params, track, t1, initial, options, limits,
-                     solver, contact_model, misalignment):
-    """Integrate segment by segment from ``initial`` = (q0, qdot0, rails0), drawing the
-    progress bar between them; returns the arguments of :func:`_results` after
-    ``rails0``."""
-    ts = np.linspace(0.0, float(t1), options.n_outputs)
-    leaves, structure = jax.tree.flatten(initial)
-    saved = [np.full((options.n_outputs,) + np.shape(x), np.nan) for x in leaves]
-    for out, x in zip(saved, leaves):
-        out[0] = x
-    q0, qdot0 = initial[0], initial[1]
-    lateral0, _, _, rest_heights, irregularity0 = timer.run(_wheelset_track_coordinates,
-                                                            vehicle, track, q0, qdot0)
-    started = _starts_derailed(limits, lateral0, irregularity0, misalignment)
-    static = dict(options=options, limits=limits, solver=solver, contact_model=contact_model)
-    result, derailed, counts = diffrax.RESULTS.successful, False, np.zeros(3, dtype=int)
-    t0, dt0, state = 0.0, options.controller()[1], initial
-    run_segment = None
-    with SimulatedTimeBar(float(t1)) as bar:
-        for indices in _segment_outputs(options.n_outputs):
-            t_end = ts[indices[-1]]
-            args = (vehicle, params, track, state, rest_heights, jnp.asarray(started),
-                    jnp.float64(t0),
-                    jnp.float64(t_end), jnp.asarray(ts[indices]), jnp.float64(dt0))
-            if run_segment is None:
-                run_segment = timer.compile(_segment, *args, **static)
-                bar.restart()
-            states, result, derailed, *stats = run_segment(*args, **static)
-            for out, x in zip(saved, jax.tree.leaves(states)):
-                out[indices] = x
-            counts += np.array([int(x) for x in stats])
-            reached = ts[indices][np.all(np.isfinite(np.asarray(states[0])), axis=1)]
-            bar.update(float(reached.max(initial=t0)))
-            if not bool(result == diffrax.RESULTS.successful) or bool(derailed):
-                break
-            if counts[0] >= options.max_steps and t_end < ts[-1]:
-                result = diffrax.RESULTS.max_steps_reached
-                break
-            if options.fixed_step is None:  # the next segment starts with this one's mean step
-                dt0 = (t_end - t0) / max(int(stats[1]), 1)
-            t0, state, started = t_end, jax.tree.map(lambda x: x[-1], states), False
-    reached = np.all([np.isfinite(x).reshape(len(ts), -1).all(axis=1) for x in saved], axis=0)
-    for x in saved:
-        x[~reached] = np.nan
-    q, qdot, rails = jax.tree.unflatten(structure, [jnp.asarray(x) for x in saved])
-    return (jnp.asarray(ts), q, qdot, rails, result, jnp.asarray(derailed),
-            *(jnp.asarray(c) for c in counts))
 
 
 def run_span(params: VehicleParams, speed, t1, s0=None) -> tuple[float, float]:
@@ -518,11 +460,12 @@ def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: f
     The compiled programs (initial equilibrium, integration, outputs) are cached: a
     second call with the same vehicle structure and options does not recompile,
     whatever the numbers; none holds a host callback, so JAX's persistent compilation
-    cache can keep them across processes (:mod:`jaxrail._compiler`). With
-    ``options.progress`` the run is integrated in about :data:`SEGMENTS` segments with
-    the bar drawn between them (each segment starts its step-size controller afresh
-    from the previous segment's mean step). Returns a :class:`SimulationResult` with
-    wall and compile times [s].
+    cache can keep them across processes (:mod:`jaxrail._compiler`). The run is one
+    program whether or not ``options.progress`` draws a bar: its loop reports each
+    step's time to the host through an XLA FFI target (:mod:`jaxrail._time_report`),
+    which the bar reads, so a run with the bar takes the same steps and gives the same
+    result, bit for bit, as one without. Returns a :class:`SimulationResult` with wall
+    and compile times [s].
     """
     start = time.perf_counter()
     if initial is None:
@@ -537,15 +480,18 @@ def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: f
         initial = timer.run(initial_state, vehicle, params, track, speed, misalignment, s0,
                             contact_model)
     initial = _as_state(track, initial)
+    # progress only draws: one program (and one cache entry) with or without the bar
+    arguments = (vehicle, params, track, t1, speed, misalignment, s0)
+    static = dict(options=dataclasses.replace(options, progress=False), limits=limits,
+                  initial=initial, solver=solver, contact_model=contact_model,
+                  report_progress=True)
+    run = timer.compile(solve, *arguments, **static)
     if options.progress:
-        outputs = _run_in_segments(timer, vehicle, params, track, t1, initial, options,
-                                   limits, solver, contact_model, misalignment)
-        result = timer.run(_results, vehicle, params, track, contact_model, *initial,
-                           *outputs)
+        with SimulatedTimeBar(float(t1)) as bar, listening(bar.update):
+            result = jax.block_until_ready(run(*arguments, **static))
+            bar.update(result.simulated_time_s)
     else:
-        result = timer.run(solve, vehicle, params, track, t1, speed, misalignment, s0,
-                           options=options, limits=limits, initial=initial, solver=solver,
-                           contact_model=contact_model)
+        result = run(*arguments, **static)
     jax.block_until_ready(result)
     wall = time.perf_counter() - start - timer.compile_s
     return eqx.tree_at(lambda r: (r.wall_time_s, r.compile_time_s), result,

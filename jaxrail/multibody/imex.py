@@ -16,7 +16,9 @@ frozen at the step's start y0. The split is exact, so the method keeps its order
 whatever J is; J decides only which modes stay stable at long steps. The implicit
 term is linear, so each stage is one solve with I - h gamma J (the same matrix for
 every stage) and no Newton iteration. Per step: one Jacobian of the stiff loads and
-s right-hand sides (s = 4, 6, 8 stages for KenCarp3, 4, 5).
+s right-hand sides (s = 4, 6, 8 stages for KenCarp3, 4, 5). A step whose matrix
+I - h gamma J is not finite or singular ends the run with diffrax's result
+``singular`` (the status "failed: singular implicit solve" of a simulation).
 
 J = [[0, I], [A_q, A_v]] with y = (q, qdot): the accelerations' dependence on the
 positions and velocities of the bodies whose loads are stiff, through those loads
@@ -64,6 +66,12 @@ class StiffJacobian(eqx.Module):
         b = hg * self.a_v + hg * hg * self.a_q
         lu = jax.scipy.linalg.lu_factor(jnp.eye(index.size, dtype=b.dtype) - b[index])
         return b, lu
+
+    @staticmethod
+    def factored_ok(factored):
+        """Whether :meth:`factor`'s LU is finite with no zero pivot (a scalar bool)."""
+        lu = factored[1][0]
+        return jnp.all(jnp.isfinite(lu)) & jnp.all(jnp.diagonal(lu) != 0.0)
 
     def solve(self, hg, factored, rhs_):
         """x = (I - hg J)^-1 rhs_ for rhs_ = (b_q, b_v), with ``factored`` from
@@ -235,9 +243,18 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         y1 = project_state(system, params, y1[0], y1[1]) + y1[2:]
         error = _unpack(like, jax.tree.map(lambda d: h * d,
                                            _weighted(jnp.asarray(b_error), f_all)))
+        # A factorisation that is not finite or has a zero pivot (a non-finite or
+        # singular I - h gamma J) ends the run: the step is kept with zero error so that
+        # the step-size controller cannot hide it by shrinking the step without end,
+        # its state is the step's start, and the result says why.
+        solved = jac.factored_ok(factored)
+        y1 = jax.tree.map(lambda new, old: jnp.where(solved, new, old), y1, like)
+        error = jax.tree.map(lambda e: jnp.where(solved, e, 0.0), error)
         dense = {key: _unpack(like, value)
                  for key, value in _dense_info(h, y0, _pack(y1), f0).items()}
-        return y1, error, dense, None, diffrax.RESULTS.successful
+        result = diffrax.RESULTS.where(solved, diffrax.RESULTS.successful,
+                                       diffrax.RESULTS.singular)
+        return y1, error, dense, None, result
 
     def func(self, terms, t0, y0, args):
         return terms.vf(t0, y0, args)

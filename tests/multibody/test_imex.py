@@ -118,3 +118,29 @@ def test_stiff_jacobian_without_linearised_is_zero():
     (_, qddot), jac = stiff_jacobian(BODY, BODY_PARAMS, 0.0, q, jnp.zeros(7),
                                      Spring(jnp.asarray(4.0), jnp.asarray(0.0)))
     assert jac.columns == () and float(qddot[0]) == pytest.approx(-4.0)
+
+
+class BrokenJacobian(StiffSpring):
+    """The stiff spring with a Jacobian entry that is not finite."""
+
+    def linearised(self, t, q, qdot):
+        forces, torques, bodies, block = super().linearised(t, q, qdot)
+        return forces, torques, bodies, block.at[0, 0, 0].set(jnp.nan)
+
+
+@pytest.mark.parametrize("controller", ["constant", "pid"])
+def test_a_failed_factorisation_ends_the_run_with_its_result(controller):
+    """The step's matrix I - h gamma J is not finite: the run stops at its start with
+    diffrax's ``singular`` result, whatever the step-size controller (an adaptive one
+    would otherwise shrink the step without end)."""
+    step = (diffrax.ConstantStepSize() if controller == "constant"
+            else diffrax.PIDController(rtol=1e-6, atol=1e-9))
+    q0 = jnp.array([1.0, 0, 0, 1.0, 0, 0, 0])
+    sol = mb.simulate_system(BODY, BODY_PARAMS, q0, jnp.zeros(7), 1.0, dt0=1e-2,
+                             saveat=diffrax.SaveAt(t1=True), solver=IMEX(),
+                             external=BrokenJacobian(jnp.asarray(1e4), jnp.asarray(2000.0)),
+                             stepsize_controller=step, throw=False, max_steps=10_000)
+    assert sol.result == diffrax.RESULTS.singular
+    assert int(sol.stats["num_steps"]) == 1
+    healthy = run(StiffSpring(jnp.asarray(1e4), jnp.asarray(2000.0)), 1e-2)
+    assert np.isfinite(np.asarray(healthy)).all()  # the same run with a finite Jacobian
