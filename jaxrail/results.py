@@ -132,8 +132,9 @@ def summarize(result, friction=0.4, flange_angle_threshold=0.6) -> dict:
 
     Keys: ``schema_version``, ``status``, ``simulated_time_s``, ``wall_time_s``,
     ``compile_time_s``, ``real_time_factor`` (simulated / wall time), ``steps``,
-    ``rhs_evaluations`` (Tsit5 is FSAL: 6 per step, accepted or rejected, + 1 at the
-    start; exact for the default solver only), ``friction``, ``nadal_limit``,
+    ``rhs_evaluations`` and ``jacobian_evaluations`` (the right-hand sides and load
+    Jacobians the integration evaluated, :func:`jaxrail.simulation.evaluations_per_step`;
+    None for a solver it does not know), ``friction``, ``nadal_limit``,
     ``flange_angle_threshold_rad``, ``wheels`` (W * 2 objects: wheelset 1 left, 1 right,
     2 left, ...) and ``wheelsets`` (W objects).
     """
@@ -181,7 +182,8 @@ def summarize(result, friction=0.4, flange_angle_threshold=0.6) -> dict:
         "compile_time_s": _optional(result.compile_time_s),
         "real_time_factor": simulated / wall if wall else None,
         "steps": steps,
-        "rhs_evaluations": 6 * steps + 1,
+        "rhs_evaluations": _count(result.rhs_evaluations),
+        "jacobian_evaluations": _count(result.jacobian_evaluations),
         "friction": float(friction),
         "nadal_limit": nadal_limit(friction),
         "flange_angle_threshold_rad": float(flange_angle_threshold),
@@ -238,10 +240,18 @@ def _root_attrs(result, metadata):
         "steps": int(result.steps),
         "accepted_steps": int(result.accepted_steps),
         "rejected_steps": int(result.rejected_steps),
+        "rhs_evaluations": int(result.rhs_evaluations),
+        "jacobian_evaluations": int(result.jacobian_evaluations),
         "wall_time_s": float(result.wall_time_s),
         "compile_time_s": float(result.compile_time_s),
     })
     return attrs
+
+
+def _count(value):
+    """An evaluation count as an int, None where the solver's is unknown (-1)."""
+    value = int(value)
+    return None if value < 0 else value
 
 
 def _datasets(result, body_names):

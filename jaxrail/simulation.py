@@ -108,6 +108,23 @@ class SolverOptions:
                                      icoeff=self.icoeff), self.dt0
 
 
+def evaluations_per_step(solver) -> tuple[int, int, int]:
+    """``(right-hand sides per step, right-hand sides at the start, load Jacobians per
+    step)`` of a step-size attempt, accepted or rejected, of ``solver``:
+
+    - :class:`~jaxrail.multibody.imex.IMEX`: s (its stages; the first comes with the
+      load Jacobian, from one contact evaluation), none at the start, one Jacobian;
+    - diffrax's Tsit5, first-same-as-last: 6 per step and 1 at the start.
+
+    ``(-1, -1, -1)`` for another solver. Counted in
+    ``tests/multibody/test_evaluations.py``."""
+    if isinstance(solver, IMEX):
+        return solver.stages, 0, 1
+    if type(solver) is diffrax.Tsit5:
+        return 6, 1, 0
+    return -1, -1, -1
+
+
 class WheelOutputs(eqx.Module):
     """Contact details at the output times; leading shape (T, W, 2, P): time, wheelset
     (leading first), wheel (left, right), patch slot.
@@ -158,6 +175,9 @@ class SimulationResult(eqx.Module):
         constraint_violation (T,): max |Phi| over the joint rows;
         result: diffrax's result code; derailed: the derailment event fired;
         steps, accepted_steps, rejected_steps: integrator statistics;
+        rhs_evaluations, jacobian_evaluations: the right-hand sides and load
+            Jacobians the integration evaluated (:func:`evaluations_per_step`; -1 for a
+            solver it does not know);
         wall_time_s, compile_time_s: host timings (NaN inside jit/vmap).
     """
 
@@ -177,6 +197,8 @@ class SimulationResult(eqx.Module):
     steps: jax.Array
     accepted_steps: jax.Array
     rejected_steps: jax.Array
+    rhs_evaluations: jax.Array
+    jacobian_evaluations: jax.Array
     wall_time_s: jax.Array
     compile_time_s: jax.Array
 
@@ -286,8 +308,17 @@ def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t0, t1, t
         event=_stop_events(vehicle, track, limits, rest_heights, report), states0=rails0)
 
 
+def _evaluations(solver, steps):
+    """(right-hand sides, load Jacobians) of ``steps`` step attempts of ``solver``
+    (:func:`evaluations_per_step`), -1 each for a solver it does not know."""
+    per_step, at_start, jacobians = evaluations_per_step(solver)
+    if per_step < 0:
+        return jnp.asarray(-1), jnp.asarray(-1)
+    return steps * per_step + at_start, steps * jacobians
+
+
 def _results(vehicle, params, track, model, q0, qdot0, rails0, ts, q, qdot, rails, result,
-             derailed, steps, accepted_steps, rejected_steps):
+             derailed, steps, accepted_steps, rejected_steps, evaluations):
     """SimulationResult from the states at the output times (non-finite rows: not
     reached), without host timings. ``rails0``, ``rails``: a flexible track's rails
     ``(w, wdot)`` at the start (W, 2, 2) and at the output times (T, W, 2, 2), or None."""
@@ -316,7 +347,8 @@ def _results(vehicle, params, track, model, q0, qdot0, rails0, ts, q, qdot, rail
         irregularity=nan(irregularity), rail_deflection=nan(deflection), wheels=wheels,
         constraint_violation=nan(violation),
         result=result, derailed=jnp.asarray(derailed), steps=steps, accepted_steps=accepted_steps,
-        rejected_steps=rejected_steps, wall_time_s=jnp.asarray(jnp.nan),
+        rejected_steps=rejected_steps, rhs_evaluations=evaluations[0],
+        jacobian_evaluations=evaluations[1], wall_time_s=jnp.asarray(jnp.nan),
         compile_time_s=jnp.asarray(jnp.nan))
 
 
@@ -384,7 +416,9 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
     return _results(vehicle, params, track, loads.model, q0, qdot0, rails0, ts,
                     *_saved_states(sol, (q0, qdot0, rails0)), sol.result, derailed,
                     sol.stats["num_steps"], sol.stats["num_accepted_steps"],
-                    sol.stats["num_rejected_steps"])
+                    sol.stats["num_rejected_steps"],
+                    _evaluations(options.solver() if solver is None else solver,
+                                 sol.stats["num_steps"]))
 
 
 PROGRAMS_KEPT = 32

@@ -107,6 +107,7 @@ def synthetic_result():
         wheels=wheels, constraint_violation=floats(np.full(T, 1e-9)),
         result=diffrax.RESULTS.successful, derailed=np.asarray(True), steps=np.asarray(100),
         accepted_steps=np.asarray(90), rejected_steps=np.asarray(10),
+        rhs_evaluations=np.asarray(800), jacobian_evaluations=np.asarray(100),
         wall_time_s=np.asarray(2.0), compile_time_s=np.asarray(np.nan))
 
 
@@ -133,7 +134,8 @@ def test_run_level_values(summary):
     assert summary["wall_time_s"] == 2.0
     assert summary["compile_time_s"] is None  # NaN in the result
     assert summary["real_time_factor"] == pytest.approx(0.3, rel=1e-12)
-    assert summary["steps"] == 100 and summary["rhs_evaluations"] == 601
+    assert summary["steps"] == 100 and summary["rhs_evaluations"] == 800
+    assert summary["jacobian_evaluations"] == 100
     assert summary["nadal_limit"] == pytest.approx(1.118384, abs=1e-6)
 
 

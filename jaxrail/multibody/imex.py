@@ -197,6 +197,11 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
             raise ValueError(f"IMEX method must be one of {sorted(METHODS)}, got "
                              f"{self.method!r}")
 
+    @property
+    def stages(self) -> int:
+        """Right-hand sides per step: the stages of the tableau."""
+        return int(_tableau(self.method)[3].size)
+
     def order(self, terms):
         return METHODS[self.method]
 

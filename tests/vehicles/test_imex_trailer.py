@@ -88,3 +88,6 @@ def test_imex_follows_tsit5_on_the_trailer(straight):
     loads = [np.nansum(np.asarray(r.wheels.normal_force), axis=-1) for r in (reference, imex)]
     assert np.max(np.abs(loads[1] - loads[0])) < 0.02 * np.max(loads[0])
     assert int(imex.accepted_steps) < 0.5 * int(reference.accepted_steps)
+    # the evaluations each run reports (counted: tests/multibody/test_evaluations.py)
+    assert int(imex.rhs_evaluations) == 8 * int(imex.steps) == 8 * int(imex.jacobian_evaluations)
+    assert int(reference.rhs_evaluations) == 6 * int(reference.steps) + 1

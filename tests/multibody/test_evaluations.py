@@ -1,0 +1,69 @@
+"""The right-hand sides and load Jacobians an integration evaluates, counted by a load
+that counts its own calls, against :func:`jaxrail.simulation.evaluations_per_step`,
+which a simulation's ``rhs_evaluations`` and ``jacobian_evaluations`` come from: IMEX
+(KenCarp3 and KenCarp5) and Tsit5, with step-size control rejecting steps."""
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import pytest
+
+import jaxrail.multibody as mb
+from jaxrail.multibody.imex import IMEX
+from jaxrail.simulation import evaluations_per_step
+
+MASS = 2.0
+BODY, BODY_PARAMS = mb.build_system([mb.RigidBody("block", MASS, (0.1, 0.2, 0.3))])
+CALLS = {"loads": 0, "linearised": 0}
+
+
+def _count(name):
+    def add():
+        CALLS[name] += 1
+    jax.debug.callback(add, ordered=True)
+
+
+class CountingSpring(eqx.Module):
+    """A stiff damped spring along global x (per unit mass k [1/s^2], c [1/s]) that
+    counts its evaluations: as loads (a right-hand side) and linearised (a right-hand
+    side with its Jacobian)."""
+
+    k: float = 1e4
+    c: float = 2000.0
+
+    def _loads(self, q, qdot):
+        force = -MASS * (self.k * q[0] + self.c * qdot[0])
+        return jnp.zeros((1, 3)).at[0, 0].set(force), jnp.zeros((1, 3))
+
+    def __call__(self, t, q, qdot):
+        _count("loads")
+        return self._loads(q, qdot)
+
+    def linearised(self, t, q, qdot):
+        _count("linearised")
+        block = jnp.zeros((1, 7, 14)).at[0, 0, 0].set(-MASS * self.k)
+        return (*self._loads(q, qdot), (0,), block.at[0, 0, 7].set(-MASS * self.c))
+
+
+@pytest.mark.parametrize("solver", [IMEX("KenCarp5"), IMEX("KenCarp3"), diffrax.Tsit5()],
+                         ids=["KenCarp5", "KenCarp3", "Tsit5"])
+def test_counted_evaluations_equal_the_reported_ones(solver):
+    CALLS.update(loads=0, linearised=0)
+    q0 = jnp.array([1.0, 0, 0, 1.0, 0, 0, 0])
+    # a first step far too long for the tolerance: the controller rejects steps
+    sol = jax.jit(lambda q: mb.simulate_system(
+        BODY, BODY_PARAMS, q, jnp.zeros(7), 0.05, dt0=0.02, saveat=diffrax.SaveAt(t1=True),
+        solver=solver, external=CountingSpring(),
+        stepsize_controller=diffrax.PIDController(rtol=1e-8, atol=1e-10), throw=False,
+        max_steps=10_000))(q0)
+    jax.effects_barrier()
+    steps, rejected = int(sol.stats["num_steps"]), int(sol.stats["num_rejected_steps"])
+    assert sol.result == diffrax.RESULTS.successful and rejected >= 1 and steps >= 5
+    per_step, at_start, jacobians = evaluations_per_step(solver)
+    assert CALLS["loads"] + CALLS["linearised"] == per_step * steps + at_start
+    assert CALLS["linearised"] == jacobians * steps
+
+
+def test_an_unknown_solver_has_no_count():
+    assert evaluations_per_step(diffrax.Dopri5()) == (-1, -1, -1)
