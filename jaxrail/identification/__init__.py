@@ -12,8 +12,11 @@ the same from that channel alone tells which measurement identifies which parame
 """
 
 import dataclasses
+import hashlib
 
 import diffrax
+import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -154,6 +157,21 @@ whose compiled fit programs, this process keeps (least recently used first out).
 _residual_cache = LruCache(MODELS_KEPT)
 
 
+def _content_key(tree) -> str:
+    """SHA-256 of a pytree's content: its structure with every static value, and each
+    array leaf's dtype, shape and bytes (a contact model and its table)."""
+    leaves, treedef = jax.tree.flatten(tree)
+    digest = hashlib.sha256(str(treedef).encode())
+    for leaf in leaves:
+        if eqx.is_array(leaf):
+            leaf = np.asarray(leaf)
+            digest.update(f"{leaf.dtype}{leaf.shape}".encode())
+            digest.update(np.ascontiguousarray(leaf).tobytes())
+        else:
+            digest.update(repr(leaf).encode())
+    return digest.hexdigest()
+
+
 def _residual_functions(vehicle, params, track, names, measurements, common):
     """The reverse- and forward-mode residual functions, the same objects for the same
     model, names, sample times, channels and noise levels: the fits of one process
@@ -162,7 +180,7 @@ def _residual_functions(vehicle, params, track, names, measurements, common):
     key = (id(vehicle), id(params), id(track), names, measurements.channels,
            measurements.time.tobytes(), measurements.noise.tobytes(),
            tuple(sorted((k, v) for k, v in common.items() if k != "contact_model")),
-           common.get("contact_model") and common["contact_model"].name)
+           _content_key(common.get("contact_model")))
 
     def functions():
         made = tuple(simulation_residuals(vehicle, params, track, names, measurements,
