@@ -15,7 +15,18 @@ outside a loop; several times slower for these small programs):
   force elements, the solve);
 - ``rhs_median_us``: the whole right-hand side (:func:`jaxrail.vehicles.vehicle_accelerations`);
   ``xla_defaults_us``: the same compiled with XLA's default options instead;
-- ``compile_s``: the compile time of each of these programs.
+- ``imex_step_us``: one whole step of the IMEX integrator (KenCarp5, 1 ms: the load
+  Jacobian, its factorisation and 8 right-hand sides), in the same loop, and two of
+  its parts: ``imex_jacobian_us``, the right-hand side with the stiff Jacobian
+  (:func:`jaxrail.multibody.imex.stiff_jacobian`: the loads, their Jacobian per
+  wheelset and the accelerations' response to it), and ``projection_us``, the
+  projection of the state onto the joints that ends each step;
+- ``compile_s``: the compile time of each of these programs;
+- ``operations``: the operations of each looped program that XLA:CPU runs as thunks
+  (``jaxrail._hlo_operations``: fused kernels and unfused operations of the
+  optimised HLO, each inner loop's body once), ``force_laws`` the difference of
+  ``loads`` and ``contact``; ``us_per_operation``: the time per evaluation over them;
+  ``operations_by_kind``: by HLO opcode.
 
 Each on rigid rails and on the co-moving flexible track (``--supports rigid flexible``,
 its default values, :mod:`jaxrail.track.flexible`): there the loads and the right-hand
@@ -36,16 +47,20 @@ import os
 import statistics
 import time
 
+import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 
 from jaxrail import enable_float64
 from jaxrail._compiler import compiler_options
+from jaxrail._hlo_operations import operation_counts
 
 enable_float64()
 
 from jaxrail.multibody import accelerations, rhs as multibody_rhs  # noqa: E402
+from jaxrail.multibody.imex import IMEX, stiff_jacobian  # noqa: E402
+from jaxrail.multibody.system import project_state  # noqa: E402
 from jaxrail.scenarios import load_scenario  # noqa: E402
 from jaxrail.contact.table_cache import contact_table  # noqa: E402
 from jaxrail.track import FlexibleTrack  # noqa: E402
@@ -55,6 +70,7 @@ from jaxrail.vehicles.vehicle import wheelset_states  # noqa: E402
 
 
 LOOP_REPEATS = 50
+IMEX_STEP = 1e-3  # [s] about the IMEX steps of the paper's curve
 
 
 def _median_call_s(compiled, args, calls):
@@ -76,10 +92,10 @@ def timed(function, args, calls):
 
 
 def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
-    """Median run time [us] of one evaluation of ``function(q, qdot, data)`` inside a
+    """(median run time [us] of one evaluation of ``function(q, qdot, data)`` inside a
     compiled loop of ``repeats`` evaluations, as the integrator runs it (median of
-    ``calls`` runs of the loop), compiled with jaxrail's compiler options
-    (:mod:`jaxrail._compiler`) or ``options``.
+    ``calls`` runs of the loop), its :func:`operation_counts`), compiled with jaxrail's
+    compiler options (:mod:`jaxrail._compiler`) or ``options``.
 
     Each evaluation sees the state moved by a tiny multiple of the previous outputs,
     so that nothing is hoisted out of the loop.
@@ -94,7 +110,7 @@ def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
 
     options = compiler_options() if options is None else options
     compiled = jax.jit(loop).lower(*args).compile(options)
-    return 1e6 * _median_call_s(compiled, args, calls) / repeats
+    return 1e6 * _median_call_s(compiled, args, calls) / repeats, operation_counts(compiled)
 
 
 def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
@@ -131,27 +147,53 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
         loads = VehicleLoads(vehicle, params, track, model)
         return multibody_rhs(0.0, (q, qdot, rails), (vehicle.system, params.system, loads))
 
+    @parts_of
+    def imex_step(q, qdot, vehicle, params, track, model, rails):
+        loads = VehicleLoads(vehicle, params, track, model)
+        y0 = (q, qdot) if rails is None else (q, qdot, rails)
+        return IMEX().step(diffrax.ODETerm(multibody_rhs), 0.0, IMEX_STEP, y0,
+                           (vehicle.system, params.system, loads), None, False)[0]
+
+    @parts_of
+    def imex_jacobian(q, qdot, vehicle, params, track, model, rails):
+        loads = VehicleLoads(vehicle, params, track, model)
+        return stiff_jacobian(vehicle.system, params.system, 0.0, q, qdot, loads, rails)
+
+    @parts_of
+    def projection(q, qdot, vehicle, params, track, model, rails):
+        return project_state(vehicle.system, params.system, q, qdot)
+
     args = (q, qdot, data)
-    parts = {name: timed(f, args, 10 * calls) for name, f in
-             (("contact", contact), ("loads", loads), ("multibody", multibody), ("rhs", rhs))}
-    looped = {name: timed_in_loop(f, args, calls) for name, f in
-              (("contact", contact), ("loads", loads), ("multibody", multibody), ("rhs", rhs))}
+    programs = (("contact", contact), ("loads", loads), ("multibody", multibody), ("rhs", rhs))
+    step_parts = (("imex_jacobian", imex_jacobian), ("projection", projection),
+                  ("imex_step", imex_step))
+    parts = {name: timed(f, args, 10 * calls) for name, f in programs}
+    looped = {name: timed_in_loop(f, args, calls) for name, f in programs + step_parts}
+    us = {name: value[0] for name, value in looped.items()}
     out = {
-        "rhs_median_us": round(looped["rhs"], 1),
-        "contact_us": round(looped["contact"], 1),
-        "force_laws_us": round(looped["loads"] - looped["contact"], 1),
-        "loads_us": round(looped["loads"], 1),
-        "multibody_us": round(looped["multibody"], 1),
-        "xla_defaults_us": round(timed_in_loop(rhs, args, calls, options={}), 1),
+        "rhs_median_us": round(us["rhs"], 1),
+        "contact_us": round(us["contact"], 1),
+        "force_laws_us": round(us["loads"] - us["contact"], 1),
+        "loads_us": round(us["loads"], 1),
+        "multibody_us": round(us["multibody"], 1),
+        "imex_step_us": round(us["imex_step"], 1),
+        "imex_jacobian_us": round(us["imex_jacobian"], 1),
+        "projection_us": round(us["projection"], 1),
+        "xla_defaults_us": round(timed_in_loop(rhs, args, calls, options={})[0], 1),
         "single_call_us": {name: round(value[0], 1) for name, value in parts.items()},
         "compile_s": {name: round(value[1], 2) for name, value in parts.items()},
+        "operations": {name: value[1]["operations"] for name, value in looped.items()},
+        "us_per_operation": {name: round(value[0] / value[1]["operations"], 3)
+                             for name, value in looped.items()},
+        "operations_by_kind": {name: value[1]["by_kind"] for name, value in looped.items()},
     }
+    out["operations"]["force_laws"] = out["operations"]["loads"] - out["operations"]["contact"]
     if batch:
         shifts = jnp.linspace(0.0, 4e-3, batch)
         q_batch = jax.vmap(lambda d: q.reshape(-1, 7).at[:, 1].add(d).reshape(-1))(shifts)
         qdot_batch = jnp.broadcast_to(qdot, (batch,) + qdot.shape)
         batched = jax.vmap(rhs, in_axes=(0, 0, None))
-        member = timed_in_loop(batched, (q_batch, qdot_batch, data), calls) / batch
+        member = timed_in_loop(batched, (q_batch, qdot_batch, data), calls)[0] / batch
         out.update(batch=batch, rhs_per_member_us=round(member, 1),
                    one_over_member=round(looped["rhs"] / member, 3))
     return out
