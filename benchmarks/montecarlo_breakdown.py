@@ -8,11 +8,13 @@ equilibrium (:func:`jaxrail.vehicles.initial_state`) [s], and the time of one fi
 integration step [ms] (from runs of two lengths started at the equilibrium, so that
 what does not grow with the steps cancels), with the ratios one / member. Run it with
 the flags of the Monte Carlo benchmark to compare like with like, e.g.
-``XLA_FLAGS=--xla_cpu_multi_thread_eigen=false``.
+``XLA_FLAGS=--xla_cpu_multi_thread_eigen=false``. ``--contact online|table`` chooses the contact
+model (default the scenario's).
 """
 
 import argparse
 import json
+import os
 import statistics
 import time
 
@@ -26,6 +28,7 @@ enable_float64()
 from jaxrail.scenarios import load_scenario  # noqa: E402
 from jaxrail.simulation import solve  # noqa: E402
 from jaxrail.vehicles import initial_state  # noqa: E402
+from jaxrail.vehicles.loads import CONTACT_MODELS  # noqa: E402
 
 
 def median_s(function, args, repeats):
@@ -47,9 +50,12 @@ def main():
     parser.add_argument("--steps", type=int, nargs=2, default=[50, 150],
                         help="the two run lengths [fixed steps]")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--contact", choices=CONTACT_MODELS, default=None,
+                        help="contact model (default: the scenario's)")
     args = parser.parse_args()
     scenario = load_scenario(args.scenario)
     vehicle, params, track = scenario.build()
+    model = scenario.contact_model(vehicle, params, args.contact, True)
     options = scenario.solver_options()
     if options.fixed_step is None:
         raise SystemExit(f"{args.scenario}: needs a scenario with fixed steps")
@@ -58,7 +64,7 @@ def main():
     misalignments = jnp.linspace(0.0, 4e-3, n)
 
     def equilibrium(v, m):
-        return initial_state(vehicle, params, track, v, m)
+        return initial_state(vehicle, params, track, v, m, model=model)
 
     init_one = median_s(equilibrium, (speeds[0], misalignments[0]), args.repeats)
     init_member = median_s(jax.vmap(equilibrium), (speeds, misalignments), args.repeats) / n
@@ -70,7 +76,7 @@ def main():
 
         def run(v, q, qdot):
             return solve(vehicle, params, track, duration, v, 0.0, options=run_options,
-                         initial=(q, qdot))
+                         initial=(q, qdot), contact_model=model)
 
         if batched:
             return median_s(jax.vmap(run), (speeds, q0, qdot0), args.repeats) / n
@@ -83,6 +89,7 @@ def main():
         step[batched] = (times[1] - times[0]) / (long - short)
     print(json.dumps({
         "benchmark": "montecarlo_breakdown", "scenario": scenario.name, "samples": n,
+        "contact": model.name, "load": os.getloadavg(),
         "fixed_step_s": options.fixed_step, "run_lengths_steps": [short, long],
         "initial_equilibrium_s": {"one": init_one, "batch_member": init_member,
                                   "one_over_member": init_one / init_member},
