@@ -195,7 +195,7 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
         batched = jax.vmap(rhs, in_axes=(0, 0, None))
         member = timed_in_loop(batched, (q_batch, qdot_batch, data), calls)[0] / batch
         out.update(batch=batch, rhs_per_member_us=round(member, 1),
-                   one_over_member=round(looped["rhs"] / member, 3))
+                   one_over_member=round(us["rhs"] / member, 3))
     return out
 
 

@@ -11,7 +11,9 @@ only, so JAX's persistent compilation cache keeps it and a later process that
 imports jaxrail (which registers the target again) runs it from the cache.
 
 The report has no output and changes no value: a program with it computes exactly
-what it would without it. :func:`jaxrail.simulate` puts it in every run's program,
+what it would without it. Runs make it through diffrax's progress-meter hook
+(:class:`TimeReportingMeter`, after each accepted step); :func:`jaxrail.simulate` puts
+it in every run's program,
 with or without a bar, so both are one program. On other backends (no target there)
 :func:`report_time` adds nothing.
 """
@@ -22,6 +24,7 @@ import math
 import threading
 import time
 
+import diffrax
 import jax
 import jax.numpy as jnp
 
@@ -135,20 +138,35 @@ def report_time(t) -> None:
     call(jax.lax.stop_gradient(jnp.asarray(t, dtype=jnp.float64)))
 
 
+class TimeReportingMeter(diffrax.AbstractProgressMeter):
+    """A diffrax progress meter that reports the time of each accepted step of a solve
+    from 0 to ``t1`` [s] (:func:`report_time`); it holds no state."""
+
+    t1: jax.Array
+
+    def init(self):
+        return None
+
+    def step(self, state, progress):
+        report_time(progress * self.t1)
+        return state
+
+    def close(self, state):
+        pass
+
+
 @contextlib.contextmanager
 def listening(sink, interval: float = 0.1):
     """Within the block, pass reported times to ``sink(t)``, at most once per
-    ``interval`` [s] of wall time, and the largest time reported so far (a rejected
-    step's end may be reported before the shorter step that replaces it)."""
+    ``interval`` [s] of wall time (the times of accepted steps only ever grow)."""
     global _sink
-    state = {"last": -math.inf, "t": -math.inf}
+    last = [-math.inf]  # wall time [s] of the last call of sink
 
     def throttled(t):
-        state["t"] = max(state["t"], t)
         now = time.monotonic()
-        if now - state["last"] >= interval:
-            state["last"] = now
-            sink(state["t"])
+        if now - last[0] >= interval:
+            last[0] = now
+            sink(t)
 
     with _lock:
         previous, _sink = _sink, throttled

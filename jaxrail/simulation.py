@@ -28,7 +28,7 @@ import numpy as np
 from ._compiler import compile_function
 from ._lru import LruCache
 from ._progress import SimulatedTimeBar
-from ._time_report import listening, report_time
+from ._time_report import TimeReportingMeter, listening
 from .multibody import constraints, simulate_system
 from .multibody.imex import IMEX
 from .track import to_track_coordinates, track_frame
@@ -244,13 +244,9 @@ def _wheelset_track_coordinates(vehicle, track, q, qdot):
     return jax.vmap(one)(position, rotation)
 
 
-def _stop_events(vehicle, track, limits, rest_height, report=False):
-    """The terminating diffrax Event of a run: (derailed, non-finite state). With
-    ``report`` each step's end time goes to the host (:func:`report_time`), for the
-    progress bar."""
+def _stop_events(vehicle, track, limits, rest_height):
+    """The terminating diffrax Event of a run: (derailed, non-finite state)."""
     def derailed(t, y, args, **kwargs):
-        if report:
-            report_time(t)
         q, qdot = y[0], y[1]
         lateral, _, _, heights, irregularity = _wheelset_track_coordinates(vehicle, track, q,
                                                                            qdot)
@@ -292,20 +288,20 @@ def _wheel_outputs(vehicle, params, track, q, qdot, rails, model):
                         forces.creepage_y, forces.spin, lateral, vertical)
 
 
-def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t0, t1, ts, dt0,
-               options, limits, solver, adjoint, rails0=None, report=False):
-    """diffrax's Solution of eq. (19) from (q0, qdot0) at t0 to t1 [s], saved at ``ts``,
-    stopped by the derailment event; ``dt0`` [s]: the first step; ``rails0``: a
-    flexible track's rails ``(w, wdot)`` at t0, integrated with the bodies; ``report``:
-    each step's time to the host (:func:`_stop_events`)."""
-    controller, _ = options.controller()
+def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t1, ts, options,
+               limits, solver, adjoint, rails0=None, report=False):
+    """diffrax's Solution of eq. (19) from (q0, qdot0) at 0 to t1 [s] with ``solver``,
+    saved at ``ts``, stopped by the derailment event; ``rails0``: a flexible track's
+    rails ``(w, wdot)`` at 0, integrated with the bodies; ``report``: each accepted
+    step's time to the host (:class:`TimeReportingMeter`)."""
+    controller, dt0 = options.controller()
     return simulate_system(
-        vehicle.system, params.system, q0, qdot0, t1, t0=t0, dt0=dt0,
-        saveat=diffrax.SaveAt(ts=ts), rtol=options.rtol, atol=options.atol,
-        solver=options.solver() if solver is None else solver,
+        vehicle.system, params.system, q0, qdot0, t1, dt0=dt0,
+        saveat=diffrax.SaveAt(ts=ts), rtol=options.rtol, atol=options.atol, solver=solver,
         external=loads, max_steps=options.max_steps, adjoint=adjoint, throw=False,
         stepsize_controller=controller,
-        event=_stop_events(vehicle, track, limits, rest_heights, report), states0=rails0)
+        event=_stop_events(vehicle, track, limits, rest_heights), states0=rails0,
+        progress_meter=TimeReportingMeter(t1) if report else None)
 
 
 def _evaluations(solver, steps):
@@ -406,9 +402,9 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
     lateral0, _, _, rest_heights, irregularity0 = _wheelset_track_coordinates(vehicle, track,
                                                                               q0, qdot0)
     ts = jnp.linspace(0.0, t1, options.n_outputs)
-    sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, 0.0, t1, ts,
-                     options.controller()[1], options, limits, solver, adjoint, rails0,
-                     report_progress)
+    solver = options.solver() if solver is None else solver
+    sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t1, ts, options,
+                     limits, solver, adjoint, rails0, report_progress)
     # a state that only turned non-finite is not derailed: diffrax's event_occurred
     # result makes the status "failed"
     derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, irregularity0,
@@ -417,8 +413,7 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
                     *_saved_states(sol, (q0, qdot0, rails0)), sol.result, derailed,
                     sol.stats["num_steps"], sol.stats["num_accepted_steps"],
                     sol.stats["num_rejected_steps"],
-                    _evaluations(options.solver() if solver is None else solver,
-                                 sol.stats["num_steps"]))
+                    _evaluations(solver, sol.stats["num_steps"]))
 
 
 PROGRAMS_KEPT = 32
@@ -496,7 +491,8 @@ def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: f
     whatever the numbers; none holds a host callback, so JAX's persistent compilation
     cache can keep them across processes (:mod:`jaxrail._compiler`). The run is one
     program whether or not ``options.progress`` draws a bar: its loop reports each
-    step's time to the host through an XLA FFI target (:mod:`jaxrail._time_report`),
+    accepted step's time to the host through diffrax's progress-meter hook and an XLA
+    FFI target (:mod:`jaxrail._time_report`),
     which the bar reads, so a run with the bar takes the same steps and gives the same
     result, bit for bit, as one without. Returns a :class:`SimulationResult` with wall
     and compile times [s].
