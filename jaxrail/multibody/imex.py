@@ -15,7 +15,7 @@ explicit in the first term and implicit (ESDIRK, L-stable) in the second, with J
 frozen at the step's start y0. The split is exact, so the method keeps its order
 whatever J is; J decides only which modes stay stable at long steps. The implicit
 term is linear, so each stage is one solve with I - h gamma J (the same matrix for
-every stage) and no Newton iteration. Per step: one Jacobian of the stiff loads and
+every stage, inverted once per step) and no Newton iteration. Per step: one Jacobian of the stiff loads and
 s right-hand sides (s = 4, 6, 8 stages for KenCarp3, 4, 5). A step whose matrix
 I - h gamma J is not finite or singular ends the run with diffrax's result
 ``singular`` (the status "failed: singular implicit solve" of a simulation).
@@ -23,7 +23,7 @@ I - h gamma J is not finite or singular ends the run with diffrax's result
 J = [[0, I], [A_q, A_v]] with y = (q, qdot): the accelerations' dependence on the
 positions and velocities of the bodies whose loads are stiff, through those loads
 only (``external.linearised``, e.g. :meth:`jaxrail.vehicles.VehicleLoads.linearised`).
-A_q, A_v have 7 columns per such body, so each stage solves a (7 k, 7 k) system
+A_q, A_v have 7 columns per such body, so the step inverts a (7 k, 7 k) matrix
 (28 x 28 for four wheelsets) instead of the whole state's. Without ``linearised``
 J = 0 and the method is the explicit KenCarp tableau.
 """
@@ -34,7 +34,6 @@ import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import jax.scipy.linalg
 import numpy as np
 
 from .system import FixedLoads, acceleration_response, accelerations, project_state, rhs
@@ -61,26 +60,29 @@ class StiffJacobian(eqx.Module):
 
     def factor(self, hg):
         """The pieces of (I - hg J)^-1: with B = hg A_v + hg^2 A_q (columns c only),
-        x_v = r + B x_c and (I - B_cc) x_c = r_c, r = b_v + hg A_q b_q[c]."""
+        x_v = r + B x_c and (I - B_cc) x_c = r_c, r = b_v + hg A_q b_q[c]; returns B
+        and the inverse (I - B_cc)^-1. One inversion per step, so that each stage's
+        solve is a product: a factorisation solved at every stage cost a LAPACK call
+        per triangle per stage (2 s - 2 per step) in the integration loop."""
         index = np.asarray(self.columns, dtype=int)
         b = hg * self.a_v + hg * hg * self.a_q
-        lu = jax.scipy.linalg.lu_factor(jnp.eye(index.size, dtype=b.dtype) - b[index])
-        return b, lu
+        inverse = jnp.linalg.inv(jnp.eye(index.size, dtype=b.dtype) - b[index])
+        return b, inverse
 
     @staticmethod
     def factored_ok(factored):
-        """Whether :meth:`factor`'s LU is finite with no zero pivot (a scalar bool)."""
-        lu = factored[1][0]
-        return jnp.all(jnp.isfinite(lu)) & jnp.all(jnp.diagonal(lu) != 0.0)
+        """Whether :meth:`factor`'s inverse is finite (a scalar bool): a matrix that is
+        not finite or is singular (a zero pivot divides by zero) gives one that is not."""
+        return jnp.all(jnp.isfinite(factored[1]))
 
     def solve(self, hg, factored, rhs_):
         """x = (I - hg J)^-1 rhs_ for rhs_ = (b_q, b_v), with ``factored`` from
         :meth:`factor` for the same hg."""
         b_q, b_v = rhs_
-        b, lu = factored
+        b, inverse = factored
         index = np.asarray(self.columns, dtype=int)
         r = b_v + hg * (self.a_q @ b_q[index])
-        x_c = jax.scipy.linalg.lu_solve(lu, r[index])
+        x_c = inverse @ r[index]
         x_v = r + b @ x_c
         return b_q + hg * x_v, x_v
 
@@ -224,32 +226,33 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         like, y0 = y0, _pack(y0)
         vf = lambda t, y: _pack(terms.vf(t, _unpack(like, y), args))  # noqa: E731
         factored = jac.factor(hg)
-        # per stage: the whole right-hand side f and its implicit part J (Y - y0)
-        f_all = jax.tree.map(lambda x: jnp.zeros((s,) + x.shape, x.dtype).at[0].set(x), f0)
-        f_stiff = jax.tree.map(lambda x: jnp.zeros((s,) + x.shape, x.dtype), f0)
-        a_e, a_i, c = (jnp.asarray(x) for x in (a_e, a_i, c))
+        # per stage i: rows i and s + i hold the explicit part f(Y_i) - J (Y_i - y0) and
+        # the implicit part J (Y_i - y0) (zero at the first stage), so that each stage's
+        # right-hand side is one weighted sum over both tableaus
+        parts = jax.tree.map(lambda x: jnp.zeros((2 * s,) + x.shape, x.dtype).at[0].set(x), f0)
+        rows = jnp.asarray(np.concatenate([a_e, a_i], axis=1))  # (s, 2 s)
+        c = jnp.asarray(c)
 
-        def stage(i, carry):
-            f_all, f_stiff = carry
-            explicit = jax.tree.map(jnp.subtract, f_all, f_stiff)
-            right = jax.tree.map(lambda x, y: h * (x + y), _weighted(a_e[i], explicit),
-                                 _weighted(a_i[i], f_stiff))
-            z = jac.solve(hg, factored, right)
+        def stage(i, parts):
+            z = jac.solve(hg, factored, jax.tree.map(lambda d: h * d,
+                                                     _weighted(rows[i], parts)))
             f = vf(t0 + c[i] * h, jax.tree.map(jnp.add, y0, z))
-            put = lambda stacked, x: jax.tree.map(lambda u, v: u.at[i].set(v), stacked, x)  # noqa: E731
-            return put(f_all, f), put(f_stiff, jac.matvec(z))
+            stiff = jac.matvec(z)
+            return jax.tree.map(lambda stacked, x, w: stacked.at[i].set(x - w).at[s + i].set(w),
+                                parts, f, stiff)
 
-        f_all, _ = jax.lax.fori_loop(1, s, stage, (f_all, f_stiff))
-        y1 = jax.tree.map(lambda y, d: y + h * d, y0, _weighted(jnp.asarray(b), f_all))
+        parts = jax.lax.fori_loop(1, s, stage, parts)
+        both = lambda weights: jnp.asarray(np.concatenate([weights, weights]))  # noqa: E731
+        y1 = jax.tree.map(lambda y, d: y + h * d, y0, _weighted(both(b), parts))
         # At about 1 ms Baumgarte's feedback (10 1/s) lets the joints drift by about
         # 1 um over the paper's curve (Tsit5's shorter steps: nm); one projection per
         # step keeps them at the explicit method's level.
         y1 = _unpack(like, y1)
         y1 = project_state(system, params, y1[0], y1[1]) + y1[2:]
         error = _unpack(like, jax.tree.map(lambda d: h * d,
-                                           _weighted(jnp.asarray(b_error), f_all)))
-        # A factorisation that is not finite or has a zero pivot (a non-finite or
-        # singular I - h gamma J) ends the run: the step is kept with zero error so that
+                                           _weighted(both(b_error), parts)))
+        # An inverse that is not finite (a non-finite or singular I - h gamma J) ends
+        # the run: the step is kept with zero error so that
         # the step-size controller cannot hide it by shrinking the step without end,
         # its state is the step's start, and the result says why.
         solved = jac.factored_ok(factored)

@@ -163,8 +163,8 @@ def test_peak_load_of_a_dropped_wheelset(wheelset, flexible):
     load = _wheel_load(params)
     half = load / G
     from jaxrail.simulation import _wheel_outputs
-    outputs = _wheel_outputs(vehicle, params, track, state[0], state[1], state[2],
-                             OnlineContact())
+    outputs = eqx.filter_jit(_wheel_outputs)(vehicle, params, track, state[0], state[1],
+                                             state[2], OnlineContact())
     delta = float(np.nanmax(np.asarray(outputs.penetration)[0, 0]))
     c_e = float(params.contact.normal_law.restitution)
     at_rest = 2.0 * load / ((1.0 + c_e) * delta**1.5)  # eq. 17 at rest: (1 + c_e)/2 of K
