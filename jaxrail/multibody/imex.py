@@ -62,8 +62,8 @@ class StiffJacobian(eqx.Module):
         """The pieces of (I - hg J)^-1: with B = hg A_v + hg^2 A_q (columns c only),
         x_v = r + B x_c and (I - B_cc) x_c = r_c, r = b_v + hg A_q b_q[c]; returns B
         and the inverse (I - B_cc)^-1. One inversion per step, so that each stage's
-        solve is a product: a factorisation solved at every stage cost a LAPACK call
-        per triangle per stage (2 s - 2 per step) in the integration loop."""
+        solve is a product (a factorisation would take two LAPACK triangular solves per
+        stage inside the integration loop)."""
         index = np.asarray(self.columns, dtype=int)
         b = hg * self.a_v + hg * hg * self.a_q
         inverse = jnp.linalg.inv(jnp.eye(index.size, dtype=b.dtype) - b[index])

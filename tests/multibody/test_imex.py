@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import jaxrail.multibody as mb
-from jaxrail.multibody.imex import IMEX, stiff_jacobian
+from jaxrail.multibody.imex import IMEX, StiffJacobian, stiff_jacobian
 from jaxrail.multibody.system import _augmented_solve, _right_hand_sides
 
 MASS = 2.0
@@ -144,3 +144,13 @@ def test_a_failed_factorisation_ends_the_run_with_its_result(controller):
     assert int(sol.stats["num_steps"]) == 1
     healthy = run(StiffSpring(jnp.asarray(1e4), jnp.asarray(2000.0)), 1e-2)
     assert np.isfinite(np.asarray(healthy)).all()  # the same run with a finite Jacobian
+
+
+@pytest.mark.parametrize("entry", [0.0, 1.0])
+def test_a_singular_step_matrix_is_not_factored_ok(entry):
+    """I - hg J with a zero pivot (hg A_v = 1 on a one-column J) has no finite inverse;
+    the same J at a shorter step has one."""
+    hg = 1e-3
+    jac = StiffJacobian((0,), jnp.zeros((1, 1)), jnp.full((1, 1), 1.0 / hg))
+    factored = jac.factor(hg * (1.0 - 0.5 * entry))
+    assert bool(jac.factored_ok(factored)) == (entry == 1.0)
