@@ -26,7 +26,6 @@ import rhs_profile as profile  # noqa: E402  (float64 and the benchmark's helper
 import diffrax  # noqa: E402
 import equinox as eqx  # noqa: E402
 import jax  # noqa: E402
-import jax.numpy as jnp  # noqa: E402
 
 import jaxrail.multibody.imex as working  # noqa: E402
 from jaxrail.multibody import rhs as multibody_rhs  # noqa: E402
@@ -46,7 +45,8 @@ def module_at(revision):
 
 
 def compiled_steps(module, q, qdot, data, structure):
-    """The compiled loop of chained IMEX steps of ``module``'s solver."""
+    """The compiled loop of chained IMEX steps of ``module``'s solver
+    (:func:`rhs_profile.compiled_loop`)."""
     def step(q, qdot, data):
         vehicle, params, track, model = eqx.combine(data, structure)
         loads = profile.VehicleLoads(vehicle, params, track, model)
@@ -54,13 +54,7 @@ def compiled_steps(module, q, qdot, data, structure):
                                   (q, qdot), (vehicle.system, params.system, loads), None,
                                   False)[0]
 
-    def loop(q, qdot, data):
-        def body(_, carry):
-            out = step(q + 1e-15 * carry, qdot + 1e-15 * carry, data)
-            return carry + sum(jnp.sum(leaf) for leaf in jax.tree_util.tree_leaves(out))
-        return jax.lax.fori_loop(0, profile.LOOP_REPEATS, body, jnp.zeros(()))
-
-    return jax.jit(loop).lower(q, qdot, data).compile(profile.compiler_options())
+    return profile.compiled_loop(step, (q, qdot, data))
 
 
 def main():

@@ -16,7 +16,7 @@ outside a loop; several times slower for these small programs):
 - ``rhs_median_us``: the whole right-hand side (:func:`jaxrail.vehicles.vehicle_accelerations`);
   ``xla_defaults_us``: the same compiled with XLA's default options instead;
 - ``imex_step_us``: one whole step of the IMEX integrator (KenCarp5, 1 ms: the load
-  Jacobian, its factorisation and 8 right-hand sides), in the same loop, and two of
+  Jacobian, the inverse of the step's matrix and 8 right-hand sides), in the same loop, and two of
   its parts: ``imex_jacobian_us``, the right-hand side with the stiff Jacobian
   (:func:`jaxrail.multibody.imex.stiff_jacobian`: the loads, their Jacobian per
   wheelset and the accelerations' response to it), and ``projection_us``, the
@@ -91,11 +91,10 @@ def timed(function, args, calls):
     return 1e6 * _median_call_s(compiled, args, calls), compile_s
 
 
-def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
-    """(median run time [us] of one evaluation of ``function(q, qdot, data)`` inside a
-    compiled loop of ``repeats`` evaluations, as the integrator runs it (median of
-    ``calls`` runs of the loop), its :func:`operation_counts`), compiled with jaxrail's
-    compiler options (:mod:`jaxrail._compiler`) or ``options``.
+def compiled_loop(function, args, repeats=LOOP_REPEATS, options=None):
+    """``function(q, qdot, data)`` evaluated ``repeats`` times in a compiled loop, as the
+    integrator runs it, compiled for ``args`` with jaxrail's compiler options
+    (:mod:`jaxrail._compiler`) or ``options``; the loop returns the sum of all outputs.
 
     Each evaluation sees the state moved by a tiny multiple of the previous outputs,
     so that nothing is hoisted out of the loop.
@@ -109,7 +108,14 @@ def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
         return jax.lax.fori_loop(0, repeats, body, jnp.zeros(()))
 
     options = compiler_options() if options is None else options
-    compiled = jax.jit(loop).lower(*args).compile(options)
+    return jax.jit(loop).lower(*args).compile(options)
+
+
+def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
+    """(median run time [us] of one evaluation of ``function(q, qdot, data)`` inside
+    :func:`compiled_loop` (median of ``calls`` runs of the loop), its
+    :func:`operation_counts`)."""
+    compiled = compiled_loop(function, args, repeats, options)
     return 1e6 * _median_call_s(compiled, args, calls) / repeats, operation_counts(compiled)
 
 

@@ -15,10 +15,10 @@ explicit in the first term and implicit (ESDIRK, L-stable) in the second, with J
 frozen at the step's start y0. The split is exact, so the method keeps its order
 whatever J is; J decides only which modes stay stable at long steps. The implicit
 term is linear, so each stage is one solve with I - h gamma J (the same matrix for
-every stage, inverted once per step) and no Newton iteration. Per step: one Jacobian of the stiff loads and
-s right-hand sides (s = 4, 6, 8 stages for KenCarp3, 4, 5). A step whose matrix
-I - h gamma J is not finite or singular ends the run with diffrax's result
-``singular`` (the status "failed: singular implicit solve" of a simulation).
+every stage, inverted once per step) and no Newton iteration. Per step: one Jacobian
+of the stiff loads and s right-hand sides (s = 4, 6, 8 stages for KenCarp3, 4, 5). A
+step whose matrix I - h gamma J is not finite or singular ends the run with diffrax's
+result ``singular`` (the status "failed: singular implicit solve" of a simulation).
 
 J = [[0, I], [A_q, A_v]] with y = (q, qdot): the accelerations' dependence on the
 positions and velocities of the bodies whose loads are stiff, through those loads
@@ -252,9 +252,9 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         error = _unpack(like, jax.tree.map(lambda d: h * d,
                                            _weighted(both(b_error), parts)))
         # An inverse that is not finite (a non-finite or singular I - h gamma J) ends
-        # the run: the step is kept with zero error so that
-        # the step-size controller cannot hide it by shrinking the step without end,
-        # its state is the step's start, and the result says why.
+        # the run: the step is kept with zero error so that the step-size controller
+        # cannot hide it by shrinking the step without end, its state is the step's
+        # start, and the result says why.
         solved = jac.factored_ok(factored)
         y1 = jax.tree.map(lambda new, old: jnp.where(solved, new, old), y1, like)
         error = jax.tree.map(lambda e: jnp.where(solved, e, 0.0), error)

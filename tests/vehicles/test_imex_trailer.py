@@ -61,7 +61,7 @@ def test_wheelset_load_jacobian_equals_brute_force_ad():
                               .read_text())
     vehicle, params, track = scenario.build()
     q, qdot = eqx.filter_jit(initial_state)(vehicle, params, track, scenario.speed, 0.004,
-                                            None, OnlineContact())  # eagerly: twice the time
+                                            None, OnlineContact())  # compiled: twice as fast as eager
     _, torques, patches, _ = jax.jit(lambda a, b: contact_loads(
         vehicle, params, track, a, b))(q, qdot)
     k = vehicle.wheelsets[0]

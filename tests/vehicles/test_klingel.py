@@ -1,9 +1,9 @@
 """A free coned wheelset (multibody + contact search + Hertz + eq. 17 + Polach, run by
 jaxrail.simulation) hunts with Klingel's kinematic wavelength 2 pi sqrt(r0 e / tan(gamma)) at low speed.
 
-Run with the default integrator (IMEX). Tsit5 on the same physics is checked against
-IMEX on the trailer (tests/vehicles/test_imex_trailer.py): its run here, 4 s at steps of
-about 0.3 ms held by the Hertz stiffness, took 80 s of the suite for no other claim."""
+Run with IMEX. Tsit5 is checked against IMEX on the trailer
+(tests/vehicles/test_imex_trailer.py); here its steps, about 0.3 ms held by the Hertz
+stiffness, would make the 4 s run cost about 80 s of the suite."""
 
 import numpy as np
 
