@@ -1,0 +1,65 @@
+"""The suspended wheelset's linear critical speed and its gradient with respect to three
+parameters (implicit differentiation, jaxrail.stability), against central differences
+of the critical speed itself; prints JSON.
+
+    python benchmarks/critical_speed_gradient.py [--step 1e-3]
+"""
+
+import argparse
+import json
+import os
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+jax.config.update("jax_enable_x64", True)
+
+from jaxrail.stability import LinearStability  # noqa: E402
+from jaxrail.track import straight_track  # noqa: E402
+from jaxrail.vehicles import get_values, set_values  # noqa: E402
+from jaxrail.vehicles.suspended_wheelset import suspended_wheelset  # noqa: E402
+
+NAMES = ("primary_longitudinal_stiffness", "primary_lateral_stiffness", "friction")
+RANGE = (60.0, 140.0)  # [m/s]
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--step", type=float, default=1e-3,
+                        help="relative step of the central differences")
+    args = parser.parse_args()
+    vehicle, params = suspended_wheelset()
+    params = set_values(vehicle, params, ["primary_longitudinal_stiffness"],
+                        jnp.array([1e6]))
+    stability = LinearStability(vehicle, params, straight_track(200.0))
+    start = time.perf_counter()
+    critical = stability.critical_speed(*RANGE)
+    solve_s = time.perf_counter() - start
+    start = time.perf_counter()
+    gradient = stability.critical_speed_gradient(critical, NAMES)
+    gradient_s = time.perf_counter() - start
+    values = np.asarray(get_values(vehicle, params, NAMES))
+    rows = []
+    for k, name in enumerate(NAMES):
+        step = args.step * values[k]
+        speeds = []
+        for sign in (1.0, -1.0):
+            moved = set_values(vehicle, params, [name], jnp.array([values[k] + sign * step]))
+            near = [stability.hunting(critical.speed + dv, moved) for dv in (-1.0, 1.0)]
+            speeds.append(stability.critical_speed(*RANGE, params=moved, points=near).speed)
+        central = (speeds[0] - speeds[1]) / (2 * step)
+        rows.append({"parameter": name, "value": float(values[k]),
+                     "implicit_derivative": gradient[name], "central_difference": central,
+                     "relative_difference": gradient[name] / central - 1.0})
+    print(json.dumps({
+        "vehicle": "suspended-wheelset, primary longitudinal stiffness 1 MN/m per side",
+        "critical_speed_m_s": critical.speed, "hunting_frequency_hz": critical.frequency_hz,
+        "critical_speed_solve_s": solve_s, "gradient_s_first_call": gradient_s,
+        "relative_step": args.step, "gradient": rows,
+        "load_average": os.getloadavg()[0]}, indent=2))
+
+
+if __name__ == "__main__":
+    main()

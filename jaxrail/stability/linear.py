@@ -1,0 +1,205 @@
+"""Linear stability of a vehicle's steady motion on straight track.
+
+The steady motion: every body moves along the track at ``speed``, the wheelsets centred
+on the rails at their rest pose (:func:`jaxrail.vehicles.initial_state`) and rolling at
+``speed / rolling radius``. It is a relative equilibrium: on an ideal straight track the
+loads do not depend on the distance travelled nor on the wheelsets' spin angle (the
+wheels are bodies of revolution, their inertia is symmetric about the axle and the
+axle's revolute joints turn freely). The perturbation of it therefore obeys linear
+equations with constant coefficients, in co-moving coordinates (12 per body, global
+axes):
+
+    z = (dr, theta) of each body, then (dv, domega) of each body,
+
+``dr`` [m] the centre's displacement from the steady motion, ``theta`` [rad] the small
+rotation (rotation vector, applied on the left: A = exp(theta) A_steady), ``dv`` [m/s]
+and ``domega`` [rad/s] the changes of the centre's velocity and of the angular velocity.
+Their equations are ``dr' = dv``, ``theta' = domega + omega0 - exp(theta) omega0`` (first
+order; omega0 the steady angular velocity, the spin) and ``(dv', domega')`` the
+accelerations of eq. (19) with the full contact model, both contact modes. The matrix
+``A = dz'/dz`` at z = 0 is taken by forward-mode differentiation of all of it.
+
+The joints tie these coordinates: A leaves the tangent space of the constraint manifold
+(the positions' and velocities' linearised constraints) invariant, and the modes of the
+vehicle are A's eigenvalues on that space (an orthonormal basis from the constraints'
+null space). Eigenvalues outside it are Baumgarte's stabilisation, not the vehicle.
+
+A **hunting mode** is an oscillatory mode whose kinetic energy (of the rates of dr and
+theta, the wheelsets' spin left out) lies mostly in the wheelsets' lateral and yaw motion (:data:`HUNTING_SHARE`); its frequency is
+``Im(lambda) / 2 pi`` and its damping ratio ``-Re(lambda) / |lambda|``.
+"""
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..multibody import constraints, join_coordinates, velocities_from_twists
+from ..multibody import quaternion as qt
+from ..vehicles.initial import initial_state
+from ..vehicles.loads import resolve_contact_model, vehicle_accelerations
+
+HUNTING_SHARE = 0.5
+"""Least share of a mode's kinetic energy in the wheelsets' lateral and yaw motion for
+it to count as hunting (wheelsets and the axlebox bodies that follow them)."""
+MIN_FREQUENCY_HZ = 0.05  # [Hz] below this a mode is not oscillatory (drift, rolling)
+NULL_TOLERANCE = 1e-9  # relative singular value below which a constraint row is void
+
+
+def check_track(track) -> None:
+    """ValueError unless ``track`` is an ideal, rigid, straight track (the steady motion
+    is a relative equilibrium there only)."""
+    if getattr(track, "irregularity", None) is not None:
+        raise ValueError("linear stability needs the ideal track: this track has "
+                         "irregularities (track.with_irregularity(None))")
+    if getattr(track, "support", None) is not None:
+        raise ValueError("linear stability is for rigid rails: this track is flexible "
+                         "(track.with_support(None))")
+    if any(kind != "straight" for kind in track.kinds):
+        raise ValueError(f"linear stability is implemented on straight track only: this "
+                         f"track's segments are {list(track.kinds)}")
+
+
+def _small_rotation(theta):
+    """Unit quaternion of the small rotation vector ``theta`` [rad] (exact to first
+    order, smooth at zero)."""
+    return qt.normalize(jnp.concatenate([jnp.ones(1), 0.5 * theta]))
+
+
+def steady_motion(vehicle, params, track, speed, model=None):
+    """``(q0, v0, omega0)``: the steady motion's coordinates (7 n,) and each body's
+    velocity and angular velocity (n, 3), global [m/s, rad/s], at the start of the
+    track."""
+    q0, qdot0 = initial_state(vehicle, params, track, speed, 0.0, None, model)[:2]
+    n = q0.shape[0] // 7
+    body, rate = q0.reshape(n, 7), qdot0.reshape(n, 7)
+    omega0 = 2.0 * jnp.einsum("bij,bj->bi", jax.vmap(qt.e_matrix)(body[:, 3:]), rate[:, 3:])
+    return q0, rate[:, :3], omega0
+
+
+def full_state(z, q0, v0, omega0):
+    """``(q, qdot)`` of the co-moving perturbation ``z`` (12 n,) of the steady motion."""
+    n = q0.shape[0] // 7
+    position, velocity = z[:6 * n].reshape(n, 6), z[6 * n:].reshape(n, 6)
+    body = q0.reshape(n, 7)
+    p = jax.vmap(lambda t, p0: qt.multiply(_small_rotation(t), p0))(position[:, 3:],
+                                                                      body[:, 3:])
+    q = join_coordinates(body[:, :3] + position[:, :3], p)
+    return q, velocities_from_twists(q, v0 + velocity[:, :3], omega0 + velocity[:, 3:])
+
+
+def comoving_rhs(z, vehicle, params, track, steady, model):
+    """``z'`` (12 n,) of the perturbation ``z`` of the steady motion ``steady`` =
+    ``(q0, v0, omega0)`` (module docstring)."""
+    q0, v0, omega0 = steady
+    n = q0.shape[0] // 7
+    q, qdot = full_state(z, q0, v0, omega0)
+    qddot = vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model).reshape(n, 7)
+    p = q.reshape(n, 7)[:, 3:]
+    angular = 2.0 * jnp.einsum("bij,bj->bi", jax.vmap(qt.e_matrix)(p), qddot[:, 3:])
+    velocity = z[6 * n:].reshape(n, 6)
+    turned = jax.vmap(lambda t, w: qt.matvec(qt.rotation_matrix(_small_rotation(t)), w))(
+        z[:6 * n].reshape(n, 6)[:, 3:], omega0)
+    theta_rate = velocity[:, 3:] + omega0 - turned
+    return jnp.concatenate([jnp.concatenate([velocity[:, :3], theta_rate], axis=1).reshape(-1),
+                            jnp.concatenate([qddot[:, :3], angular], axis=1).reshape(-1)])
+
+
+def _joint_rows(vehicle, params, z, steady):
+    """Joint constraints Phi and Phidot (normalisation rows left out) at ``z``."""
+    q, qdot = full_state(z, *steady)
+    phi, _, phidot, _ = constraints(vehicle.system, params.system, q, qdot)
+    n = vehicle.system.n_bodies
+    return jnp.concatenate([phi[n:], phidot[n:]])
+
+
+def linear_system(vehicle, params, track, steady, model=None):
+    """``(A, C)``: the state matrix (12 n, 12 n) of the co-moving perturbation of the
+    steady motion ``steady`` = ``(q0, v0, omega0)`` (:func:`steady_motion`) and the
+    linearised joint constraints C (2 m, 12 n) (positions, then velocities).
+    Traceable: jit, vmap and differentiate it."""
+    model = resolve_contact_model(model)
+    z0 = jnp.zeros(12 * vehicle.system.n_bodies)
+    a = jax.jacfwd(comoving_rhs)(z0, vehicle, params, track, steady, model)
+    c = jax.jacfwd(_joint_rows, argnums=2)(vehicle, params, z0, steady)
+    return a, c
+
+
+def tangent_basis(c) -> np.ndarray:
+    """Orthonormal basis (12 n, k) of the null space of the constraint rows ``c``."""
+    c = np.asarray(c, dtype=np.float64)
+    size = c.shape[1]
+    if c.shape[0] == 0:
+        return np.eye(size)
+    _, s, vh = np.linalg.svd(c)
+    rank = int(np.sum(s > NULL_TOLERANCE * max(s[0], 1.0)))
+    return vh[rank:].T
+
+
+@dataclasses.dataclass(frozen=True)
+class Modes:
+    """The vehicle's modes at one speed (host NumPy).
+
+    Fields:
+        eigenvalues: (k,) complex [1/s].
+        vectors: (12 n, k) complex right eigenvectors in the co-moving coordinates.
+        hunting_share: (k,) share of each mode's kinetic energy in the wheelsets'
+            lateral and yaw motion (with the axlebox bodies that ride on them).
+        frequency_hz: (k,) ``|Im lambda| / 2 pi``.
+        damping_ratio: (k,) ``-Re lambda / |lambda|``.
+    """
+
+    eigenvalues: np.ndarray
+    vectors: np.ndarray
+    hunting_share: np.ndarray
+
+    @property
+    def frequency_hz(self):
+        return np.abs(self.eigenvalues.imag) / (2.0 * np.pi)
+
+    @property
+    def damping_ratio(self):
+        return -self.eigenvalues.real / np.maximum(np.abs(self.eigenvalues), 1e-300)
+
+    def hunting(self) -> int:
+        """Index of the least damped hunting mode (largest real part among the
+        oscillatory modes, Im > 0, with :data:`HUNTING_SHARE`); ValueError if none."""
+        candidates = np.flatnonzero((self.eigenvalues.imag > 2 * np.pi * MIN_FREQUENCY_HZ)
+                                    & (self.hunting_share >= HUNTING_SHARE))
+        if candidates.size == 0:
+            raise ValueError("no hunting mode: no oscillatory mode has its kinetic energy "
+                             "mostly in the wheelsets' lateral and yaw motion")
+        return int(candidates[np.argmax(self.eigenvalues.real[candidates])])
+
+
+def _energy_weights(vehicle, params):
+    """Kinetic-energy weights (n, 6) of each body's (dr, theta) rates, the wheelsets'
+    spin left out (it is cyclic), and the mask (n, 6) of wheelset lateral and yaw
+    (wheelsets and the axlebox bodies that ride on them)."""
+    bodies = params.system.bodies
+    mass = np.asarray(bodies.mass)
+    inertia = np.asarray(bodies.inertia)  # (n, 3, 3), body axes = track axes when steady
+    weights = np.concatenate([np.repeat(mass[:, None], 3, axis=1),
+                              np.diagonal(inertia, axis1=1, axis2=2)], axis=1)
+    weights[np.asarray(vehicle.wheelsets), 4] = 0.0
+    mask = np.zeros_like(weights, dtype=bool)
+    for body in tuple(vehicle.wheelsets) + tuple(vehicle.axleboxes):
+        mask[body, 1] = mask[body, 5] = True
+    return weights, mask
+
+
+def modes(vehicle, params, a, c) -> Modes:
+    """Eigenvalues and eigenvectors of ``a`` on the null space of ``c``, with each
+    mode's hunting share."""
+    basis = tangent_basis(c)
+    a = np.asarray(a, dtype=np.float64)
+    values, small = np.linalg.eig(basis.T @ a @ basis)
+    vectors = basis @ small
+    n = vehicle.system.n_bodies
+    weights, mask = _energy_weights(vehicle, params)
+    # the rates of (dr, theta) are lambda times the positions' part: |lambda|^2 cancels
+    energy = weights.reshape(-1)[:, None] * np.abs(vectors[:6 * n]) ** 2
+    share = np.sum(energy[mask.reshape(-1)], axis=0) / np.maximum(np.sum(energy, axis=0),
+                                                                  1e-300)
+    return Modes(values, vectors, share)

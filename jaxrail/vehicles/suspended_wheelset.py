@@ -1,0 +1,65 @@
+"""A suspended single wheelset: the textbook model of hunting stability (Wickens).
+
+One wheelset tied by the trailer's primary suspension (longitudinal and lateral springs,
+the vertical damper, at +-``axlebox.half_span`` either side of the track centreline) to a
+frame that moves along the track. The frame slides along the global x axis on a
+prismatic joint to the ground (the straight track's direction): it neither rolls,
+yaws nor moves sideways or vertically, so the wheelset's lateral and yaw motion meets
+the yaw stiffness ``2 k_x b^2`` and the lateral stiffness ``2 k_y`` of a frame that
+goes straight on, Wickens' model. The frame's mass is the sprung mass per axle of the
+trailer (``carbody / 4 + bogie / 2``); the primary springs have no vertical stiffness
+and press the wheelset down with the frame's weight as a constant preload (Wickens'
+constant axle load), so the wheel loads are the trailer's at any frame height. Nothing
+drives or brakes the frame.
+
+Body order: frame, axlebox_1, wheelset_1 (the axlebox body joined to the wheelset by a
+revolute joint about the axle, as in the trailer). Straight track along global x only:
+the prismatic joint fixes the frame's path.
+"""
+
+import dataclasses
+
+import numpy as np
+
+from ..contact.search import SearchConfig
+from ..multibody import Prismatic, RigidBody, build_system
+from ..profiles import rail_offset as profile_rail_offset
+from ..profiles import s1002, uic60
+from .trailer import GRAVITY, primary_bushings, trailer_values, unsprung_bodies
+from .vehicle import Vehicle, VehicleParams
+from .wheel_rail import ContactParameters
+
+FRAME_GYRATION_RADIUS = 1.0  # [m] of the frame (its rotations are held by the joint) [A]
+
+
+def frame_mass(values: dict) -> float:
+    """Sprung mass per axle [kg]: carbody / 4 + bogie / 2 (the trailer's)."""
+    return 0.25 * values["carbody.mass"] + 0.5 * values["bogie.mass"]
+
+
+def suspended_wheelset(wheel=None, rail=None, values=None, config=SearchConfig(),
+                       contact=None) -> tuple[Vehicle, VehicleParams]:
+    """The suspended wheelset as ``(Vehicle, VehicleParams)``; arguments as
+    :func:`jaxrail.vehicles.trailer`. Force elements ``primary_1_left``/``_right``;
+    the joint ``guide`` holds the frame on the line y = 0, z = frame height."""
+    v = trailer_values() if values is None else values
+    r0 = v["wheelset.nominal_radius"]
+    wheel = s1002(nominal_radius=r0) if wheel is None else wheel
+    rail = uic60("1:40") if rail is None else rail
+    mass = frame_mass(v)
+    height = v["bogie.height"]
+    bodies = [RigidBody("frame", mass, (mass * FRAME_GYRATION_RADIUS**2,) * 3)]
+    unsprung, unsprung_layout, joints = unsprung_bodies(v, (0.0,))
+    guide = Prismatic("ground", "frame", (0.0, 0.0, height), (0.0, 0.0, 0.0),
+                      axis_i=(1.0, 0.0, 0.0), axis_j=(1.0, 0.0, 0.0), name="guide")
+    # no vertical stiffness: the springs press the wheelset down with a constant force,
+    # the frame's weight (Wickens' constant axle load), whatever the frame's height
+    forces = [dataclasses.replace(b, stiffness=b.stiffness[:2] + (0.0,) + b.stiffness[3:])
+              for b in primary_bushings(v, 1, "frame", 0.0, mass * GRAVITY / 2.0)]
+    system, system_params = build_system(bodies + unsprung, joints + [guide], forces,
+                                         gravity=(0.0, 0.0, -GRAVITY))
+    vehicle = Vehicle("suspended wheelset", system, (2,), config, axleboxes=(1,))
+    layout = np.array([(0.0, 0.0, height)] + unsprung_layout)
+    return vehicle, VehicleParams(system_params,
+                                  ContactParameters() if contact is None else contact,
+                                  wheel, rail, profile_rail_offset(rail), layout)

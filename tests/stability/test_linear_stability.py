@@ -1,0 +1,90 @@
+"""Linear stability of the suspended wheelset against closed forms: Wickens' model built
+here from the coefficients the engine reports. The critical speed's gradient is checked against central
+differences of the critical speed by benchmarks/critical_speed_gradient.py: its
+forward-over-forward programs take about 2.5 min to compile, beyond the suite's budget."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrail.stability import LinearStability
+from jaxrail.stability.wheelset import wheelset_coefficients
+from jaxrail.track import Track, straight_track
+from jaxrail.track.layout import Arc, Straight
+from jaxrail.vehicles import set_values, trailer_values
+from jaxrail.vehicles.suspended_wheelset import suspended_wheelset
+
+LONGITUDINAL_STIFFNESS = 1e6  # [N/m] per side: a yaw stiffness that puts V_c near 100 m/s
+RANGE = (60.0, 140.0)  # [m/s]
+
+
+@pytest.fixture(scope="module")
+def wheelset():
+    vehicle, params = suspended_wheelset()
+    params = set_values(vehicle, params, ["primary_longitudinal_stiffness"],
+                        jnp.array([LONGITUDINAL_STIFFNESS]))
+    track = straight_track(200.0)
+    stability = LinearStability(vehicle, params, track)
+    coefficients = jax.jit(lambda p, v: wheelset_coefficients(vehicle, p, track, v))
+    return vehicle, params, stability, coefficients
+
+
+@pytest.fixture(scope="module")
+def critical(wheelset):
+    return wheelset[2].critical_speed(*RANGE)
+
+
+def _wickens(mass, yaw_inertia, lateral_stiffness, yaw_stiffness, c):
+    """Least stable eigenvalue (Im > 0) of Wickens' 2-dof wheelset at speed V, as a
+    function of V: lateral y and yaw psi, creep f11, f22, f23, conicity, gravitational
+    stiffness (Garg and Dukkipati's form, no gyroscopic terms)."""
+    f11, f22, f23 = c["f11_n"], c["f22_n"], c["f23_n_m"]
+    lam, l0, r0, kg = (c["conicity"], c["half_contact_distance_m"], c["rolling_radius_m"],
+                       c["gravitational_stiffness_n_m"])
+
+    def eigenvalue(speed):
+        m = np.diag([mass, yaw_inertia])
+        damping = np.array([[2 * f22, 2 * f23], [-2 * f23, 2 * f11 * l0**2]]) / speed
+        stiffness = np.array([[lateral_stiffness + kg, -2 * f22],
+                              [2 * f11 * lam * l0 / r0, yaw_stiffness + 2 * f23]])
+        a = np.block([[np.zeros((2, 2)), np.eye(2)],
+                      [-np.linalg.solve(m, stiffness), -np.linalg.solve(m, damping)]])
+        values = np.linalg.eigvals(a)
+        values = values[values.imag > 0.0]
+        return values[np.argmax(values.real)]
+
+    return eigenvalue
+
+
+def test_critical_speed_matches_wickens_model(wheelset, critical):
+    vehicle, params, _, coefficients = wheelset
+    c = {k: float(v) for k, v in coefficients(params, critical.speed).items()}
+    v = trailer_values()
+    eigenvalue = _wickens(v["wheelset.mass"] + v["axlebox.mass"],
+                          v["wheelset.yaw_inertia"] + v["axlebox.yaw_inertia"],
+                          2 * v["primary.lateral_stiffness"],
+                          2 * LONGITUDINAL_STIFFNESS * v["axlebox.half_span"] ** 2, c)
+    low, high = 10.0, 1000.0
+    assert eigenvalue(low).real < 0.0 < eigenvalue(high).real
+    for _ in range(80):
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if eigenvalue(mid).real < 0.0 else (low, mid)
+    assert abs(critical.speed / high - 1.0) < 0.02
+    assert abs(critical.eigenvalue.real) < 1e-6 * abs(critical.eigenvalue)
+    assert critical.hunting_share > 0.9
+
+
+def test_bad_inputs_are_named(wheelset, critical):
+    vehicle, params, stability, _ = wheelset
+    with pytest.raises(ValueError, match="does not bracket.*damping ratio"):
+        stability.critical_speed(20.0, 40.0, points=[stability.hunting(20.0),
+                                                     stability.hunting(40.0)])
+    with pytest.raises(ValueError, match="unknown parameter 'spring'"):
+        stability.critical_speed_gradient(critical, ["spring"])
+    with pytest.raises(ValueError, match="0 < low < high"):
+        stability.critical_speed(50.0, 40.0)
+    curved = Track.from_segments([Straight(50.0), Arc(50.0, 300.0)],
+                                 allow_curvature_jumps=True)
+    with pytest.raises(ValueError, match="straight track only"):
+        LinearStability(vehicle, params, curved)
