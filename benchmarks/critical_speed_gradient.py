@@ -31,8 +31,6 @@ def main():
                         help="relative step of the central differences")
     args = parser.parse_args()
     vehicle, params = suspended_wheelset()
-    params = set_values(vehicle, params, ["primary_longitudinal_stiffness"],
-                        jnp.array([1e6]))
     stability = LinearStability(vehicle, params, straight_track(200.0))
     start = time.perf_counter()
     critical = stability.critical_speed(*RANGE)

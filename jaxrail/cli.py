@@ -401,6 +401,45 @@ def _tables_command(args):
     return 0
 
 
+def _stability_command(args):
+    from .scenarios import load_scenario
+    from .stability.report import format_study, speed_range, stability_study
+    from .vehicles import contact_model
+
+    scenario = load_scenario(args.scenario)
+    low, high = (speed_range(args.speeds) if args.speeds
+                 else (0.25 * scenario.speed, 3.0 * scenario.speed))
+    if args.points < 2:
+        raise ValueError(f"--points {args.points}: need at least 2 speeds")
+    vehicle, params, track = scenario.build()
+    model = (contact_model(args.contact, vehicle, params, progress=not args.quiet)
+             if args.contact == "table" else None)
+    print(f"jaxrail stability {scenario.name}: {low:g}-{high:g} m/s, compiling ...",
+          file=sys.stderr)
+    study = stability_study(vehicle, params, track.with_irregularity(None).with_support(None),
+                            low, high, args.points, model)
+    study["scenario"] = scenario.name
+    print(format_study(study), file=sys.stderr)
+    _emit_json(study, args.json)
+    if args.plot:
+        from .plots.stability import plot_root_locus
+
+        plot_root_locus(study, args.plot)
+        print(f"wrote {args.plot}", file=sys.stderr)
+    return 0
+
+
+def _assess_command(args):
+    from .standards.en14363 import assess_file, format_table
+
+    assessment = assess_file(args.results, vehicle_type=args.vehicle_type,
+                             static_wheel_load=args.static_wheel_load,
+                             max_speed_kmh=args.max_speed, curve_radius=args.curve_radius)
+    print(format_table(assessment), file=sys.stderr)
+    _emit_json(assessment, args.json)
+    return 0 if assessment["passed"] else 1
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="jaxrail", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -527,6 +566,39 @@ def build_parser():
     tables.add_argument("scenario", help="a built-in scenario or a .toml file")
     tables.add_argument("--quiet", action="store_true", help="no progress bar")
     tables.set_defaults(run=_tables_command)
+    stability = commands.add_parser(
+        "stability", help="linear stability: the hunting mode against speed and the "
+                          "linear critical speed (straight, ideal, rigid track)")
+    stability.add_argument("scenario", help="a built-in scenario (e.g. suspended-wheelset) "
+                                            "or a scenario .toml file (its vehicle, "
+                                            "profiles and friction)")
+    stability.add_argument("--speeds", help="speed range LO:HI [m/s] holding the crossing "
+                                            "(default: 0.25 to 3 times the scenario's speed)")
+    stability.add_argument("--points", type=int, default=9,
+                           help="speeds of the root locus over the range (default 9)")
+    stability.add_argument("--json", help="write the study as JSON here (default: stdout)")
+    stability.add_argument("--plot", help="write the root locus figure (PNG) here")
+    stability.add_argument("--contact", choices=("online", "table"), default="online",
+                           help="contact model (default: the paper's search)")
+    stability.add_argument("--quiet", action="store_true", help="no progress bar")
+    stability.set_defaults(run=_stability_command)
+
+    assess = commands.add_parser(
+        "assess", help="EN 14363 running safety and track loading of a results file")
+    assess.add_argument("results", help="a results file (HDF5) of jaxrail simulate --out")
+    assess.add_argument("--json", help="write the assessment as JSON here (default: stdout)")
+    assess.add_argument("--vehicle-type", choices=("passenger", "locomotive", "freight"),
+                        default="passenger", help="sets Prud'homme's alpha and the carbody "
+                                                  "limits (default passenger)")
+    assess.add_argument("--static-wheel-load", type=float,
+                        help="Q0 [N] (default: each wheelset's mean Q over the record)")
+    assess.add_argument("--max-speed", type=float,
+                        help="the vehicle's permissible speed [km/h] (caps Qlim; default: "
+                             "the run's top speed)")
+    assess.add_argument("--curve-radius", type=float,
+                        help="curve radius of the section [m] (default: straight track, "
+                             "no quasi-static checks)")
+    assess.set_defaults(run=_assess_command)
     return parser
 
 
@@ -542,7 +614,7 @@ def _prepare_outputs(args):
     options = vars(args)
     out = options.get("out")
     files = [("--out", path) for path in (out if isinstance(out, list) else [out])]
-    files += [(f"--{name}", options.get(name)) for name in ("csv", "summary", "plot")]
+    files += [(f"--{name}", options.get(name)) for name in ("csv", "summary", "plot", "json")]
     targets = [(flag, Path(path), Path(path).parent) for flag, path in files if path]
     if options.get("plots"):  # a folder of figures
         targets.append(("--plots", Path(options["plots"]), Path(options["plots"])))

@@ -49,12 +49,18 @@ BAD_INPUTS = [
      "--duration must be within [0.0001, 3600] s, got inf"),
     (["simulate", SCENARIO, "--duration", "3000"],
      "300001 output times (the trailer's results alone 1.14 GB); at most 200001"),
+    (["stability", "suspended-wheelset", "--speeds", "80"],
+     "--speeds '80': give LO:HI in m/s with 0 < LO < HI"),
+    (["stability", "suspended-wheelset", "--speeds", "90:40"],
+     "--speeds '90:40': give LO:HI in m/s with 0 < LO < HI"),
+    (["stability", "suspended-wheelset", "--points", "1"], "--points 1: need at least 2"),
+    (["stability", "nofile.toml"], "unknown scenario 'nofile.toml'"),
 ]
 
 
 @pytest.mark.parametrize("argv, message", BAD_INPUTS)
 def test_bad_command_lines_are_named(argv, message, capsys):
-    quiet = ["--quiet"] if argv[0] in ("simulate", "montecarlo", "tables") else []
+    quiet = ["--quiet"] if argv[0] in ("simulate", "montecarlo", "tables", "stability") else []
     assert main(argv + quiet) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err

@@ -29,9 +29,9 @@ import numpy as np
 
 from ..results import (MIN_VERTICAL_FORCE_N, SIDES, _masked_max, derailment_ratio,
                        nadal_forces, nadal_limit, summarize)
+from ..standards import en14363
 
-SLIDING_WINDOW_M = 2.0  # [m] EN 14363 sliding mean of Y/Q and of the track shifting force
-PRUDHOMME_ALPHA = 1.0  # 1 for passenger vehicles and locomotives, 0.85 for freight
+SLIDING_WINDOW_M = en14363.SLIDING_MEAN_WINDOW_M  # [m] of Y/Q and the track shifting force
 
 
 def sliding_mean(values, window):
@@ -52,10 +52,12 @@ def sliding_ratio(y, q, window):
     return np.where(loaded, sliding_mean(y, window) / np.where(loaded, mean_q, 1.0), np.nan)
 
 
-def prudhomme_limit(axle_load, alpha=PRUDHOMME_ALPHA):
+def prudhomme_limit(axle_load, vehicle_type="passenger"):
     """Prud'homme's limit of the track shifting force [N]: alpha (10 kN + P / 3) with
-    the static wheelset load ``axle_load`` P [N]."""
-    return alpha * (10e3 + np.asarray(axle_load, dtype=np.float64) / 3.0)
+    the static wheelset load ``axle_load`` P [N]
+    (:func:`jaxrail.standards.en14363.prudhomme_limit` of the wheel load P / 2)."""
+    return en14363.prudhomme_limit(0.5 * np.asarray(axle_load, dtype=np.float64),
+                                   vehicle_type)
 
 
 def track_shifting_force(result):

@@ -7,7 +7,9 @@ Built-in: ``paper-curve`` (the paper's example with real S1002 / UIC60 1:40 prof
 irregularities), ``paper-curve-irregular`` (the paper's curve on German low-level
 irregularities and the co-moving flexible track), and
 ``bogie-curve-entry`` (a loaded bogie running into a 300 m curve onto the flange root
-in 1 s, fixed steps: the identification scenario). The file
+in 1 s, fixed steps: the identification scenario), ``suspended-wheelset`` (one
+wheelset on a primary suspension to a frame going straight on, the reference of the
+linear stability analysis, docs/stability.md). The file
 format is described in docs/scenarios.md.
 """
 
@@ -26,16 +28,17 @@ from ..simulation import INTEGRATORS, SolverOptions, run_span, simulate
 from ..track import Arc, Straight, Track, Transition
 from ..track.flexible import FlexibleTrack
 from ..vehicles import CONTACT_MODELS, bogie, contact_model, single_wheelset, trailer
+from ..vehicles.suspended_wheelset import suspended_wheelset
 from ..vehicles.trailer import trailer_values
 
 __all__ = ["BUILTIN", "Scenario", "load_scenario", "parse_scenario", "run_scenario"]
 
 BUILTIN = ("paper-curve", "paper-curve-simplified", "paper-curve-irregular", "straight",
-           "straight-irregular", "bogie-curve-entry")
+           "straight-irregular", "bogie-curve-entry", "suspended-wheelset")
 _SEGMENTS = {"straight": (Straight, {"length"}),
              "transition": (Transition, {"length"}),
              "arc": (Arc, {"length", "radius", "direction", "cant"})}
-_MODELS = ("trailer", "bogie", "single-wheelset")
+_MODELS = ("trailer", "bogie", "single-wheelset", "suspended-wheelset")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -136,6 +139,9 @@ class Scenario:
         if self.model in ("trailer", "bogie"):
             values = trailer_values(self.vehicle_data)
             vehicle, params = (trailer if self.model == "trailer" else bogie)(wheel, rail, values)
+        elif self.model == "suspended-wheelset":
+            values = None if self.vehicle_data is None else trailer_values(self.vehicle_data)
+            vehicle, params = suspended_wheelset(wheel, rail, values)
         else:
             vehicle, params = single_wheelset(wheel, rail)
         params = eqx.tree_at(lambda p: p.contact.friction, params, self.friction)

@@ -2,7 +2,7 @@
 and a pass/fail table, from the channels of a simulated run or a jaxrail results file.
 
 Plain NumPy float64 on the host. What a simulated run can claim is in
-docs/standards-en14363-draft.md: EN 14363's on-track measuring method is a test
+docs/standards.md: EN 14363's on-track measuring method is a test
 procedure on a real vehicle; here its quantities are computed from a simulated run's
 forces in the same way, as the standard's simulation route does, and the result is an
 estimate for one run on one track, not an acceptance.

@@ -1,6 +1,7 @@
 """A suspended single wheelset: the textbook model of hunting stability (Wickens).
 
-One wheelset tied by the trailer's primary suspension (longitudinal and lateral springs,
+One wheelset tied by a primary suspension (the trailer's, softer longitudinally:
+:data:`LONGITUDINAL_STIFFNESS`) (longitudinal and lateral springs,
 the vertical damper, at +-``axlebox.half_span`` either side of the track centreline) to a
 frame that moves along the track. The frame slides along the global x axis on a
 prismatic joint to the ground (the straight track's direction): it neither rolls,
@@ -30,6 +31,11 @@ from .vehicle import Vehicle, VehicleParams
 from .wheel_rail import ContactParameters
 
 FRAME_GYRATION_RADIUS = 1.0  # [m] of the frame (its rotations are held by the joint) [A]
+LONGITUDINAL_STIFFNESS = 1.0e6
+"""[N/m] per side [A]: the primary longitudinal stiffness of the suspended wheelset, a
+soft yaw stiffness (2 k_x b^2 = 2 MN m/rad at b = 1 m) that puts its linear critical
+speed near 100 m/s on S1002 / UIC60 1:40; the trailer's 31.4 MN/m puts it far above
+any service speed."""
 
 
 def frame_mass(values: dict) -> float:
@@ -40,9 +46,13 @@ def frame_mass(values: dict) -> float:
 def suspended_wheelset(wheel=None, rail=None, values=None, config=SearchConfig(),
                        contact=None) -> tuple[Vehicle, VehicleParams]:
     """The suspended wheelset as ``(Vehicle, VehicleParams)``; arguments as
-    :func:`jaxrail.vehicles.trailer`. Force elements ``primary_1_left``/``_right``;
-    the joint ``guide`` holds the frame on the line y = 0, z = frame height."""
-    v = trailer_values() if values is None else values
+    :func:`jaxrail.vehicles.trailer` (default values: the trailer's, with the primary
+    longitudinal stiffness :data:`LONGITUDINAL_STIFFNESS`). Force elements
+    ``primary_1_left``/``_right``; the joint ``guide`` holds the frame on the line
+    y = 0, z = frame height."""
+    if values is None:
+        values = {**trailer_values(), "primary.longitudinal_stiffness": LONGITUDINAL_STIFFNESS}
+    v = values
     r0 = v["wheelset.nominal_radius"]
     wheel = s1002(nominal_radius=r0) if wheel is None else wheel
     rail = uic60("1:40") if rail is None else rail

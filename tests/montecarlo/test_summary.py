@@ -32,7 +32,7 @@ def test_sliding_ratio_is_the_ratio_of_the_means_and_survives_an_unloaded_instan
 def test_prudhomme_limit_of_a_110_kN_axle():
     # alpha (10 kN + P/3): 110 kN static wheelset load -> 46.67 kN
     assert prudhomme_limit(110e3) == pytest.approx(10e3 + 110e3 / 3.0)
-    assert prudhomme_limit(110e3, alpha=0.85) == pytest.approx(0.85 * (10e3 + 110e3 / 3.0))
+    assert prudhomme_limit(110e3, "freight") == pytest.approx(0.85 * (10e3 + 110e3 / 3.0))
 
 
 def _wheels(**fields):

@@ -4,7 +4,6 @@ differences of the critical speed by benchmarks/critical_speed_gradient.py: its
 forward-over-forward programs take about 2.5 min to compile, beyond the suite's budget."""
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -12,18 +11,15 @@ from jaxrail.stability import LinearStability
 from jaxrail.stability.wheelset import wheelset_coefficients
 from jaxrail.track import Track, straight_track
 from jaxrail.track.layout import Arc, Straight
-from jaxrail.vehicles import set_values, trailer_values
-from jaxrail.vehicles.suspended_wheelset import suspended_wheelset
+from jaxrail.vehicles import trailer_values
+from jaxrail.vehicles.suspended_wheelset import LONGITUDINAL_STIFFNESS, suspended_wheelset
 
-LONGITUDINAL_STIFFNESS = 1e6  # [N/m] per side: a yaw stiffness that puts V_c near 100 m/s
 RANGE = (60.0, 140.0)  # [m/s]
 
 
 @pytest.fixture(scope="module")
 def wheelset():
     vehicle, params = suspended_wheelset()
-    params = set_values(vehicle, params, ["primary_longitudinal_stiffness"],
-                        jnp.array([LONGITUDINAL_STIFFNESS]))
     track = straight_track(200.0)
     stability = LinearStability(vehicle, params, track)
     coefficients = jax.jit(lambda p, v: wheelset_coefficients(vehicle, p, track, v))

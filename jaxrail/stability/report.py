@@ -1,0 +1,80 @@
+"""The linear stability study of a scenario's vehicle: the hunting mode over a speed
+range (the root locus), the linear critical speed and the EN 15302 equivalent conicity,
+as a JSON-ready dict and a terminal table (what ``jaxrail stability`` prints)."""
+
+import math
+
+import numpy as np
+
+from ..geometry import wheelset_geometry
+from ..geometry.report import conicity_entries
+from ..vehicles import get_values
+from .critical import LinearStability
+
+CONICITY_AMPLITUDE_M = 3e-3  # [m] amplitude of the reported equivalent conicity
+_SHIFTS = np.round(np.arange(-10.0, 10.0 + 1e-9, 0.1), 9) * 1e-3  # [m] for the conicity
+
+
+def speed_range(text: str) -> tuple[float, float]:
+    """``(low, high)`` [m/s] of ``LO:HI``; ValueError names ``--speeds``."""
+    parts = text.split(":")
+    try:
+        low, high = (float(p) for p in parts) if len(parts) == 2 else (math.nan, math.nan)
+    except ValueError:
+        low = high = math.nan
+    if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low < high):
+        raise ValueError(f"--speeds {text!r}: give LO:HI in m/s with 0 < LO < HI, e.g. 20:150")
+    return low, high
+
+
+def equivalent_conicity(vehicle, params, amplitude=CONICITY_AMPLITUDE_M) -> float:
+    """EN 15302 equivalent conicity [-] of the vehicle's wheel on its rail at the
+    track gauge its rail offset sets, at ``amplitude`` [m] (integral method on the
+    quasi-static rolling radius difference over +-10 mm)."""
+    gauge = float(get_values(vehicle, params, ["track_gauge"])[0])
+    geometry = wheelset_geometry(params.wheel, params.rail, _SHIFTS, gauge=gauge)
+    entries = conicity_entries(_SHIFTS, np.asarray(geometry.delta_r),
+                               float(params.wheel.nominal_radius), (1e3 * amplitude,))
+    return entries[0]["tan_gamma_e"]
+
+
+def stability_study(vehicle, params, track, low, high, points=9, model=None) -> dict:
+    """The hunting mode at ``points`` speeds over ``[low, high]`` [m/s], the linear
+    critical speed there (:meth:`LinearStability.critical_speed`: ValueError if the
+    range holds no crossing) and the equivalent conicity at 3 mm."""
+    stability = LinearStability(vehicle, params, track, model)
+    sweep = stability.sweep(np.linspace(low, high, points))
+    critical = stability.critical_speed(low, high, points=sweep)
+    row = lambda p: {"speed_m_s": p.speed, "real_part_1_s": p.eigenvalue.real,  # noqa: E731
+                     "frequency_hz": p.frequency_hz, "damping_ratio": p.damping_ratio,
+                     "hunting_share": p.hunting_share}
+    return {
+        "vehicle": vehicle.name,
+        "contact": stability.model.name,
+        "linear_critical_speed_m_s": critical.speed,
+        "linear_critical_speed_km_h": 3.6 * critical.speed,
+        "hunting_frequency_hz": critical.frequency_hz,
+        "equivalent_conicity": equivalent_conicity(vehicle, params),
+        "equivalent_conicity_amplitude_m": CONICITY_AMPLITUDE_M,
+        "method": ("eigenvalues of the forward-mode Jacobian about the steady motion on "
+                   "straight track; critical speed where the least damped hunting mode's "
+                   "real part crosses zero (Illinois root solve)"),
+        "root_locus": [row(p) for p in sweep],
+    }
+
+
+def format_study(study: dict) -> str:
+    """The study as a plain-text table for the terminal."""
+    lines = [f"{'speed m/s':>10} {'km/h':>7} {'freq Hz':>8} {'damping':>9} {'share':>6}"]
+    for r in study["root_locus"]:
+        lines.append(f"{r['speed_m_s']:10.2f} {3.6 * r['speed_m_s']:7.1f} "
+                     f"{r['frequency_hz']:8.3f} {r['damping_ratio']:9.4f} "
+                     f"{r['hunting_share']:6.2f}")
+    conicity = study["equivalent_conicity"]
+    lines += [
+        f"linear critical speed: {study['linear_critical_speed_m_s']:.2f} m/s "
+        f"({study['linear_critical_speed_km_h']:.1f} km/h), hunting at "
+        f"{study['hunting_frequency_hz']:.3f} Hz",
+        "equivalent conicity (EN 15302, 3 mm): "
+        + ("not covered by +-10 mm" if conicity is None else f"{conicity:.4f}")]
+    return "\n".join(lines)
