@@ -85,9 +85,9 @@ class LinearStability:
 
     def critical_speed(self, low, high, params=None, points=None) -> SpeedPoint:
         """The speed in ``[low, high]`` [m/s] where the hunting mode's real part crosses
-        zero from below: bisection of the first bracketing interval of ``points`` (a
-        sweep over the range, default 5 speeds), then the secant (Illinois) method to
-        :data:`SPEED_TOLERANCE`. ValueError, with the damping at both ends, if the range
+        zero from below: the first interval of ``points`` (a sweep over the range,
+        default 5 speeds) that brackets it, narrowed by the Illinois (regula falsi)
+        method until a step moves the speed by less than :data:`SPEED_TOLERANCE`. ValueError, with the damping at both ends, if the range
         does not bracket a crossing."""
         if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low < high):
             raise ValueError(f"speed range: need 0 < low < high [m/s], got {low}, {high}")

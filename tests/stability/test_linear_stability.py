@@ -1,25 +1,33 @@
 """Linear stability of the suspended wheelset against closed forms: Wickens' model built
-here from the coefficients the engine reports. The critical speed's gradient is checked against central
+here from the coefficients the engine reports, and Klingel's kinematic frequency as the
+speed goes to zero. Coned wheels (1:40) on UIC60 1:40: one contact patch per wheel, so
+the conicity is the rolling radius difference's slope (on S1002 two close patches share
+the load, docs/stability.md). The critical speed's gradient is checked against central
 differences of the critical speed by benchmarks/critical_speed_gradient.py: its
 forward-over-forward programs take about 2.5 min to compile, beyond the suite's budget."""
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jaxrail.profiles import uic60
+from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.stability import LinearStability
 from jaxrail.stability.wheelset import wheelset_coefficients
 from jaxrail.track import Track, straight_track
 from jaxrail.track.layout import Arc, Straight
-from jaxrail.vehicles import trailer_values
+from jaxrail.vehicles import set_values, trailer_values
 from jaxrail.vehicles.suspended_wheelset import LONGITUDINAL_STIFFNESS, suspended_wheelset
 
-RANGE = (60.0, 140.0)  # [m/s]
+CONE = 0.025  # [rad] of the coned wheels
+RANGE = (200.0, 300.0)  # [m/s]: the critical speed is near 238 m/s
 
 
 @pytest.fixture(scope="module")
 def wheelset():
-    vehicle, params = suspended_wheelset()
+    vehicle, params = suspended_wheelset(conical_wheel(CONE, nominal_radius=0.46),
+                                         uic60("1:40"))
     track = straight_track(200.0)
     stability = LinearStability(vehicle, params, track)
     coefficients = jax.jit(lambda p, v: wheelset_coefficients(vehicle, p, track, v))
@@ -28,7 +36,8 @@ def wheelset():
 
 @pytest.fixture(scope="module")
 def critical(wheelset):
-    return wheelset[2].critical_speed(*RANGE)
+    stability = wheelset[2]
+    return stability.critical_speed(*RANGE, points=stability.sweep(RANGE))
 
 
 def _wickens(mass, yaw_inertia, lateral_stiffness, yaw_stiffness, c):
@@ -69,6 +78,19 @@ def test_critical_speed_matches_wickens_model(wheelset, critical):
     assert abs(critical.speed / high - 1.0) < 0.02
     assert abs(critical.eigenvalue.real) < 1e-6 * abs(critical.eigenvalue)
     assert critical.hunting_share > 0.9
+
+
+def test_free_wheelset_hunts_at_klingels_frequency_as_speed_goes_to_zero(wheelset):
+    vehicle, params, stability, coefficients = wheelset
+    free = set_values(vehicle, params, ["primary_longitudinal_stiffness",
+                                        "primary_lateral_stiffness"], jnp.zeros(2))
+    speed = 2.0  # [m/s]: V / L = 0.12 Hz
+    c = {k: float(v) for k, v in coefficients(free, speed).items()}
+    wavelength = 2 * np.pi * np.sqrt(c["rolling_radius_m"] * c["half_contact_distance_m"]
+                                     / c["conicity"])
+    point = stability.hunting(speed, free)
+    assert abs(point.frequency_hz / (speed / wavelength) - 1.0) < 0.01
+    assert abs(point.damping_ratio) < 0.05
 
 
 def test_bad_inputs_are_named(wheelset, critical):
