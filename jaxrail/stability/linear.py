@@ -41,8 +41,8 @@ from ..vehicles.initial import initial_state
 from ..vehicles.loads import resolve_contact_model, vehicle_accelerations
 
 HUNTING_SHARE = 0.5
-"""Least share of a mode's kinetic energy in the wheelsets' lateral and yaw motion for
-it to count as hunting (wheelsets and the axlebox bodies that follow them)."""
+"""Least share of a mode's kinetic energy in the running gear's lateral and yaw motion
+for it to count as hunting (:func:`running_gear`)."""
 MIN_FREQUENCY_HZ = 0.05  # [Hz] below this a mode is not oscillatory (drift, rolling)
 NULL_TOLERANCE = 1e-9  # relative singular value below which a constraint row is void
 
@@ -144,8 +144,8 @@ class Modes:
     Fields:
         eigenvalues: (k,) complex [1/s].
         vectors: (12 n, k) complex right eigenvectors in the co-moving coordinates.
-        hunting_share: (k,) share of each mode's kinetic energy in the wheelsets'
-            lateral and yaw motion (with the axlebox bodies that ride on them).
+        hunting_share: (k,) share of each mode's kinetic energy in the running gear's
+            lateral and yaw motion (:func:`running_gear`).
         frequency_hz: (k,) ``|Im lambda| / 2 pi``.
         damping_ratio: (k,) ``-Re lambda / |lambda|``.
     """
@@ -169,14 +169,24 @@ class Modes:
                                     & (self.hunting_share >= HUNTING_SHARE))
         if candidates.size == 0:
             raise ValueError("no hunting mode: no oscillatory mode has its kinetic energy "
-                             "mostly in the wheelsets' lateral and yaw motion")
+                             "mostly in the running gear's lateral and yaw motion")
         return int(candidates[np.argmax(self.eigenvalues.real[candidates])])
+
+
+def running_gear(vehicle) -> tuple[int, ...]:
+    """The wheelsets, their axlebox bodies and the frames joined to those by a force
+    element (the primary suspension's bogie frames): the bodies that hunt together."""
+    unsprung = set(vehicle.wheelsets) | set(vehicle.axleboxes)
+    frames = {other for group in vehicle.system.force_groups
+              for i, j in zip(group.body_i, group.body_j)
+              for body, other in ((i, j), (j, i)) if body in unsprung and other >= 0}
+    return tuple(sorted(unsprung | frames))
 
 
 def _energy_weights(vehicle, params):
     """Kinetic-energy weights (n, 6) of each body's (dr, theta) rates, the wheelsets'
-    spin left out (it is cyclic), and the mask (n, 6) of wheelset lateral and yaw
-    (wheelsets and the axlebox bodies that ride on them)."""
+    spin left out (it is cyclic), and the mask (n, 6) of the running gear's lateral and
+    yaw motion (:func:`running_gear`)."""
     bodies = params.system.bodies
     mass = np.asarray(bodies.mass)
     inertia = np.asarray(bodies.inertia)  # (n, 3, 3), body axes = track axes when steady
@@ -184,7 +194,7 @@ def _energy_weights(vehicle, params):
                               np.diagonal(inertia, axis1=1, axis2=2)], axis=1)
     weights[np.asarray(vehicle.wheelsets), 4] = 0.0
     mask = np.zeros_like(weights, dtype=bool)
-    for body in tuple(vehicle.wheelsets) + tuple(vehicle.axleboxes):
+    for body in running_gear(vehicle):
         mask[body, 1] = mask[body, 5] = True
     return weights, mask
 
