@@ -189,8 +189,7 @@ def _track_command(args):
     if not 0.0 < args.length <= MAX_IRREGULARITY_LENGTH_M:  # also NaN
         raise ValueError(f"--length must be within (0, {MAX_IRREGULARITY_LENGTH_M:g}] m, got "
                          f"{args.length}")
-    if args.seed < 0:
-        raise ValueError(f"--seed must be >= 0, got {args.seed}")
+    _check_seed(args.seed)
     if not args.scale >= 0.0:
         raise ValueError(f"--scale must be >= 0, got {args.scale}")
     try:
@@ -274,7 +273,8 @@ def _montecarlo_command(args):
         use_host_devices(args.host_devices)
     import numpy as np
 
-    from .montecarlo import parse_variation, run_montecarlo, write_table
+    from .montecarlo import (parse_variation, run_montecarlo, study_statistics, successful,
+                             write_table)
     from .montecarlo.sampling import check_names
     from .scenarios import load_scenario
     from .vehicles.parameters import PARAMETERS
@@ -285,8 +285,7 @@ def _montecarlo_command(args):
         jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
     if args.samples < 1:
         raise ValueError(f"--samples must be >= 1, got {args.samples}")
-    if args.seed < 0:
-        raise ValueError(f"--seed must be >= 0, got {args.seed}")
+    _check_seed(args.seed)
     for path in args.out or ():
         if Path(path).suffix.lower() not in (".csv", ".parquet"):
             raise ValueError(f"--out {path}: the suffix must be .csv or .parquet")
@@ -310,7 +309,6 @@ def _montecarlo_command(args):
                             progress=not args.quiet, contact=args.contact,
                             checkpoint=checkpoint, overwrite=args.overwrite)
     table = result.table
-    n = len(table["status"])
     print(f"{result.statuses} in {result.run_time_s:.1f} s (+ {result.compile_time_s:.1f} s "
           f"compiling), {result.throughput(duration):.3g} simulated s per wall s, "
           f"chunks of {result.chunk}", file=sys.stderr)
@@ -331,33 +329,9 @@ def _montecarlo_command(args):
                 plot_maps(table, directory / "maps.png", x=axes[0], y=axes[1])
             plot_distributions(table, directory / "distributions.png")
             print(f"wrote figures to {directory}", file=sys.stderr)
-    ok = table["status"] == "successful"
-    stats = {"scenario": scenario.name, "samples": n, "seed": args.seed,
-             "duration_s": duration, "statuses": result.statuses,
-             "compile_time_s": result.compile_time_s, "run_time_s": result.run_time_s,
-             "devices": result.devices, "chunk": result.chunk}
-    for key in table:
-        values = np.asarray(table[key])
-        if values.dtype.kind == "f" and key not in ("sample",):
-            good = values[ok & np.isfinite(values)]
-            if good.size:
-                stats.setdefault("successful_samples", {})[key] = {
-                    "min": float(good.min()), "median": float(np.median(good)),
-                    "max": float(good.max())}
     if jax.process_index() == 0:  # every process has the whole table; one writes
-        _emit_json(stats, args.summary)
-    return 0 if np.all(ok) else 1
-
-
-def _contact_option(parser):
-    parser.add_argument("--contact", choices=("online", "table"),
-                        help="contact model: the paper's search at every evaluation (online) "
-                        "or its table, built once and cached (default: the scenario's "
-                        "[contact] mode)")
-    parser.add_argument("--integrator", choices=("tsit5", "imex"),
-                        help="tsit5: explicit; imex: creep and contact stiffness implicit, "
-                        "steps about 3 times longer (default: the scenario's [solver] "
-                        "integrator)")
+        _emit_json(study_statistics(result, scenario.name, duration), args.summary)
+    return 0 if np.all(successful(table)) else 1
 
 
 def _duration(scenario, args) -> float:
@@ -430,14 +404,88 @@ def _stability_command(args):
 
 
 def _assess_command(args):
+    from .standards.comfort import comfort_of_file, format_comfort
     from .standards.en14363 import assess_file, format_table
 
     assessment = assess_file(args.results, vehicle_type=args.vehicle_type,
                              static_wheel_load=args.static_wheel_load,
                              max_speed_kmh=args.max_speed, curve_radius=args.curve_radius)
     print(format_table(assessment), file=sys.stderr)
+    try:
+        assessment["en12299"] = comfort_of_file(args.results)
+        print(format_comfort(assessment["en12299"]), file=sys.stderr)
+    except ValueError as error:  # no carbody or no accelerations: EN 14363 alone
+        assessment["en12299"] = {"not_assessed": str(error)}
+        print(f"EN 12299: not assessed: {error}", file=sys.stderr)
     _emit_json(assessment, args.json)
     return 0 if assessment["passed"] else 1
+
+
+# Options that several commands share, each written once so that its name, default and
+# help read the same in every command (argparse lists options in the order they are added).
+
+STANDARD_GAUGE_MM = 1435.0
+# jaxrail.vehicles.loads.CONTACT_MODELS, written out: --help imports no vehicle models
+CONTACT_MODES = ("online", "table")
+SCENARIO_HELP = "a built-in scenario or a .toml file"
+
+
+def _scenario_argument(parser, help=SCENARIO_HELP):
+    """The positional ``scenario``: a built-in name or a scenario .toml file
+    (:func:`jaxrail.scenarios.load_scenario`)."""
+    parser.add_argument("scenario", help=help)
+
+
+def _duration_option(parser):
+    """``--duration`` [s], the scenario's unless given (checked by :func:`_duration`)."""
+    parser.add_argument("--duration", type=float,
+                        help="simulated time [s] (default: the scenario's)")
+
+
+def _quiet_option(parser):
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _json_option(parser, flag, what):
+    """``flag``: the file :func:`_emit_json` writes (stdout without it); its help reads
+    "write the ``what`` here"."""
+    parser.add_argument(flag, help=f"write the {what} here (default: stdout)")
+
+
+def _plots_option(parser, help):
+    """``--plots``: a folder of figures, made if missing (:func:`_prepare_outputs`)."""
+    parser.add_argument("--plots", help=help)
+
+
+def _seed_option(parser):
+    """``--seed``, checked by :func:`_check_seed`."""
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+
+
+def _check_seed(seed):
+    if seed < 0:
+        raise ValueError(f"--seed must be >= 0, got {seed}")
+
+
+def _inclination_option(parser, help):
+    """``--inclination`` of the UIC60 rail: 1:40 unless given."""
+    parser.add_argument("--inclination", default="1:40", help=help)
+
+
+def _gauge_option(parser, help):
+    """``--gauge`` [mm], standard gauge unless given (checked by :func:`_check_gauge`)."""
+    parser.add_argument("--gauge", type=float, default=STANDARD_GAUGE_MM, help=help)
+
+
+def _contact_option(parser):
+    parser.add_argument("--contact", choices=CONTACT_MODES,
+                        help="contact model: the paper's search at every evaluation (online) "
+                        "or its table, built once and cached (default: the scenario's "
+                        "[contact] mode)")
+    parser.add_argument("--integrator", choices=("tsit5", "imex"),
+                        help="tsit5: explicit; imex: creep and contact stiffness implicit, "
+                        "steps about 3 times longer (default: the scenario's [solver] "
+                        "integrator)")
 
 
 def build_parser():
@@ -446,9 +494,9 @@ def build_parser():
 
     profile = commands.add_parser("profile", help="write a wheel or rail profile (mm) and plot it")
     profile.add_argument("name", help="s1002, s1002-simplified, uic60, or a .prw/.prr/.csv file")
-    profile.add_argument("--inclination", default="1:40", help="rail inclination: 1:40, 1:20, none")
+    _inclination_option(profile, "rail inclination: 1:40, 1:20, none")
     profile.add_argument("--kind", choices=("wheel", "rail"), help="kind of a text profile file")
-    profile.add_argument("--gauge", type=float, default=1435.0, help="track gauge for the plot [mm]")
+    _gauge_option(profile, "track gauge for the plot [mm]")
     profile.add_argument("--points", type=int, default=401, help="number of points written")
     profile.add_argument("--csv", help="write the points (y_mm,z_mm) to this CSV file")
     profile.add_argument("--plot", help="write a PNG of the wheel on the rail")
@@ -459,8 +507,8 @@ def build_parser():
     geometry.add_argument("--wheel", default="s1002",
                           help="s1002, s1002-simplified, or a .prw/.csv wheel profile file")
     geometry.add_argument("--rail", default="uic60", help="uic60 or a .prr rail profile file")
-    geometry.add_argument("--inclination", default="1:40", help="uic60 inclination: 1:40, 1:20, none")
-    geometry.add_argument("--gauge", type=float, default=1435.0, help="track gauge [mm]")
+    _inclination_option(geometry, "uic60 inclination: 1:40, 1:20, none")
+    _gauge_option(geometry, "track gauge [mm]")
     geometry.add_argument("--shift-from", type=float, default=-10.0, help="first shift [mm], + left")
     geometry.add_argument("--shift-to", type=float, default=10.0, help="last shift [mm]")
     geometry.add_argument("--shift-step", type=float, default=0.5, help="shift step [mm]")
@@ -473,21 +521,19 @@ def build_parser():
 
     simulate = commands.add_parser(
         "simulate", help="run a scenario: results file, JSON summary, figures")
-    simulate.add_argument("scenario", help="paper-curve, paper-curve-simplified, straight, "
-                                           "or a scenario .toml file")
-    simulate.add_argument("--duration", type=float, help="simulated time [s] (default: the "
-                                                         "scenario's)")
+    _scenario_argument(simulate, "paper-curve, paper-curve-simplified, straight, or a scenario "
+                                 ".toml file")
+    _duration_option(simulate)
     simulate.add_argument("--out", help="write the time histories to this HDF5 file")
-    simulate.add_argument("--summary", help="write the JSON summary here (default: stdout)")
-    simulate.add_argument("--plots", help="write the figures (PNG) into this directory")
-    simulate.add_argument("--quiet", action="store_true", help="no progress bar")
+    _json_option(simulate, "--summary", "JSON summary")
+    _plots_option(simulate, "write the figures (PNG) into this directory")
+    _quiet_option(simulate)
     _contact_option(simulate)
     simulate.set_defaults(run=_simulate_command)
 
     ident = commands.add_parser(
         "identify", help="fit contact or suspension parameters to measured time histories")
-    ident.add_argument("scenario", help="a built-in scenario (e.g. bogie-curve-entry) or a "
-                                        ".toml file")
+    _scenario_argument(ident, "a built-in scenario (e.g. bogie-curve-entry) or a .toml file")
     ident.add_argument("--measured", required=True,
                        help="CSV of measured channels (format: docs/identification.md)")
     ident.add_argument("--fit", required=True,
@@ -501,15 +547,15 @@ def build_parser():
     ident.add_argument("--cutoff", type=float,
                        help="low-pass cutoff [Hz] the measured channels were filtered with "
                             "(default: a fifth of their sample rate)")
-    ident.add_argument("--out", help="write the JSON result here (default: stdout)")
+    _json_option(ident, "--out", "JSON result")
     ident.add_argument("--plot", help="write a PNG of the loss, parameters and channels")
-    ident.add_argument("--quiet", action="store_true", help="no progress bar")
+    _quiet_option(ident)
     _contact_option(ident)
     ident.set_defaults(run=_identify_command)
 
     mc = commands.add_parser(
         "montecarlo", help="many runs of a scenario over drawn speeds, misalignments, parameters")
-    mc.add_argument("scenario", help="a built-in scenario or a .toml file")
+    _scenario_argument(mc)
     mc.add_argument("--samples", type=int, required=True, help="number of samples N")
     mc.add_argument("--vary", action="append", metavar="NAME=SPREAD",
                     help="an input and its spread: lo:hi (uniform), normal:mean,sd, or "
@@ -517,18 +563,17 @@ def build_parser():
                          "(friction, contact_stiffness, ...). Repeat for several")
     mc.add_argument("--design", choices=("latin", "random", "grid"), default="latin",
                     help="sampling design (default: latin hypercube)")
-    mc.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    _seed_option(mc)
     mc.add_argument("--chunk", type=int, help="samples per compiled batch (default: "
                                               "min(N, 64), rounded to the devices)")
-    mc.add_argument("--duration", type=float, help="simulated time [s] (default: the "
-                                                   "scenario's)")
+    _duration_option(mc)
     mc.add_argument("--out", action="append", help="write the table to this .csv or "
                                                    ".parquet file (repeat for both)")
     mc.add_argument("--overwrite", action="store_true",
                     help="start afresh over a checkpoint of another study (OUT.chunks.json, "
                          "the finished chunks kept while the study runs)")
-    mc.add_argument("--summary", help="write the JSON statistics here (default: stdout)")
-    mc.add_argument("--plots", help="write the maps and distributions (PNG) here")
+    _json_option(mc, "--summary", "JSON statistics")
+    _plots_option(mc, "write the maps and distributions (PNG) here")
     mc.add_argument("--host-devices", type=int, metavar="N",
                     help="split each chunk over N CPU devices run side by side (e.g. one "
                          "per core; sets XLA_FLAGS, see docs/montecarlo.md)")
@@ -537,7 +582,7 @@ def build_parser():
     mc.add_argument("--coordinator", help="with --distributed: host:port of process 0")
     mc.add_argument("--num-processes", type=int, help="with --distributed")
     mc.add_argument("--process-id", type=int, help="with --distributed")
-    mc.add_argument("--quiet", action="store_true", help="no progress bar")
+    _quiet_option(mc)
     _contact_option(mc)
     mc.set_defaults(run=_montecarlo_command)
 
@@ -550,7 +595,7 @@ def build_parser():
                            help="german-low, german-high, fra-1 ... fra-6")
     irregular.add_argument("--length", type=float, required=True, help="track length [m]")
     irregular.add_argument("--step", type=float, default=0.25, help="sample spacing [m]")
-    irregular.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    _seed_option(irregular)
     irregular.add_argument("--band", default="3:150",
                            help="wavelengths LO:HI [m] (default 3:150)")
     irregular.add_argument("--scale", type=float, default=1.0, help="factor on every channel")
@@ -563,30 +608,30 @@ def build_parser():
     tables.add_argument("action", choices=("build", "info"),
                         help="build: build and cache it (if not cached); info: where it is "
                         "and how it was built")
-    tables.add_argument("scenario", help="a built-in scenario or a .toml file")
-    tables.add_argument("--quiet", action="store_true", help="no progress bar")
+    _scenario_argument(tables)
+    _quiet_option(tables)
     tables.set_defaults(run=_tables_command)
     stability = commands.add_parser(
         "stability", help="linear stability: the hunting mode against speed and the "
                           "linear critical speed (straight, ideal, rigid track)")
-    stability.add_argument("scenario", help="a built-in scenario (e.g. suspended-wheelset) "
-                                            "or a scenario .toml file (its vehicle, "
-                                            "profiles and friction)")
+    _scenario_argument(stability, "a built-in scenario (e.g. suspended-wheelset) or a scenario "
+                                  ".toml file (its vehicle, profiles and friction)")
     stability.add_argument("--speeds", help="speed range LO:HI [m/s] holding the crossing "
                                             "(default: 0.25 to 3 times the scenario's speed)")
     stability.add_argument("--points", type=int, default=9,
                            help="speeds of the root locus over the range (default 9)")
-    stability.add_argument("--json", help="write the study as JSON here (default: stdout)")
+    _json_option(stability, "--json", "study as JSON")
     stability.add_argument("--plot", help="write the root locus figure (PNG) here")
-    stability.add_argument("--contact", choices=("online", "table"), default="online",
+    stability.add_argument("--contact", choices=CONTACT_MODES, default="online",
                            help="contact model (default: the paper's search)")
-    stability.add_argument("--quiet", action="store_true", help="no progress bar")
+    _quiet_option(stability)
     stability.set_defaults(run=_stability_command)
 
     assess = commands.add_parser(
-        "assess", help="EN 14363 running safety and track loading of a results file")
+        "assess", help="EN 14363 running safety and track loading, and EN 12299 ride "
+                       "comfort, of a results file")
     assess.add_argument("results", help="a results file (HDF5) of jaxrail simulate --out")
-    assess.add_argument("--json", help="write the assessment as JSON here (default: stdout)")
+    _json_option(assess, "--json", "assessment as JSON")
     assess.add_argument("--vehicle-type", choices=("passenger", "locomotive", "freight"),
                         default="passenger", help="sets Prud'homme's alpha and the carbody "
                                                   "limits (default passenger)")

@@ -265,7 +265,7 @@ def _datasets(result, body_names):
         x = np.asarray(x, dtype=np.float64)
         return np.where(rows(x), x, np.nan)
 
-    q, qdot = floats(result.q), floats(result.qdot)
+    q, qdot, qddot = floats(result.q), floats(result.qdot), floats(result.qddot)
     n = q.shape[1] // 7
     if q.shape[1] != 7 * n:
         raise ValueError(f"result: q must have 7 numbers per body, got shape {q.shape}")
@@ -304,6 +304,11 @@ def _datasets(result, body_names):
         "bodies/qdot": (qdot.reshape(len(t), n, 7), "m/s (x, y, z); 1/s (e0, e1, e2, e3)",
                         ("time derivatives of bodies/q (not angular velocities); axes: "
                          "time, body, component"), "time, body, component"),
+        "bodies/qddot": (qddot.reshape(len(t), n, 7),
+                         "m/s^2 (x, y, z); 1/s^2 (e0, e1, e2, e3)",
+                         ("time derivatives of bodies/qdot: the accelerations of eq. (19) "
+                          "with the loads of the outputs; axes: time, body, component"),
+                         "time, body, component"),
         "constraint_violation": (floats(result.constraint_violation), "m",
                                  "largest |Phi| over the joint constraint equations",
                                  "time"),
@@ -330,7 +335,7 @@ def write_results(path, result, *, metadata: dict | None = None) -> None:
     The layout (docs/results.md): root attributes (``metadata`` entries, e.g. scenario
     name and description, plus format, jaxrail version, creation time, status and
     integrator statistics from the result); datasets ``time``, ``valid``,
-    ``wheelset/{lateral,vertical,yaw}``, ``bodies/{q,qdot}`` (T, n, 7),
+    ``wheelset/{lateral,vertical,yaw}``, ``bodies/{q,qdot,qddot}`` (T, n, 7),
     ``contact/<WheelOutputs field>`` and ``constraint_violation``, each with attributes
     ``units`` (SI, "1" for dimensionless), ``description`` and ``axes``.
     ``metadata["body_names"]`` (n names), if given, labels the bodies.

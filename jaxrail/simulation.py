@@ -29,7 +29,8 @@ from ._compiler import compile_function
 from ._lru import LruCache
 from ._progress import SimulatedTimeBar
 from ._time_report import TimeReportingMeter, listening
-from .multibody import constraints, simulate_system
+from .multibody import accelerations, constraints, simulate_system
+from .multibody.system import FixedLoads
 from .multibody.imex import IMEX
 from .track import to_track_coordinates, track_frame
 from .track.irregularity import rail_offsets
@@ -160,6 +161,8 @@ class SimulationResult(eqx.Module):
 
     Fields:
         t (T,) [s]; q, qdot (T, 7 n): body states (jaxrail.multibody conventions);
+        qddot (T, 7 n): their accelerations (eq. 19 with the loads of the outputs; NaN
+            after an early stop);
         valid (T,): output times the run reached (False after an early stop);
         wheelset_lateral, wheelset_vertical, wheelset_yaw (T, W): wheelset centre
             relative to the design track centreline [m] and yaw relative to the track
@@ -184,6 +187,7 @@ class SimulationResult(eqx.Module):
     t: jax.Array
     q: jax.Array
     qdot: jax.Array
+    qddot: jax.Array
     valid: jax.Array
     wheelset_lateral: jax.Array
     wheelset_vertical: jax.Array
@@ -272,20 +276,30 @@ def _starts_derailed(limits, lateral0, irregularity0, misalignment):
             | (unknown & (jnp.abs(misalignment) > limits.lateral)))
 
 
-def _wheel_outputs(vehicle, params, track, q, qdot, rails, model):
-    """WheelOutputs at one state (leading shape (W, 2, P)); ``rails``: the flexible
-    track's ``(w, wdot)`` (W, 2, 2), or None."""
-    _, _, patches, forces = contact_loads(vehicle, params, track, q, qdot, model, rails)
+def _outputs(vehicle, params, track, q, qdot, rails, model):
+    """``(WheelOutputs, qddot)`` at one state: the wheel outputs (leading shape (W, 2,
+    P)) and the accelerations (7 n,) of eq. (19) with the same loads, from one contact
+    evaluation; ``rails``: the flexible track's ``(w, wdot)`` (W, 2, 2), or None."""
+    forces_on_bodies, torques, patches, forces = contact_loads(vehicle, params, track, q,
+                                                               qdot, model, rails)
+    qddot = accelerations(vehicle.system, params.system, 0.0, q, qdot,
+                          FixedLoads(forces_on_bodies, torques))[0]
     position, _, _, _ = wheelset_states(vehicle, q, qdot)
     frames = jax.vmap(lambda r: track_frame(track, to_track_coordinates(track, r)[0]))(position)
     side = jnp.array([1.0, -1.0])[None, :]
     total = jnp.sum(forces.force, axis=2)  # (W, 2, 3)
     lateral = jnp.einsum("wsi,wi->ws", total, frames[:, :, 1]) * side
     vertical = jnp.einsum("wsi,wi->ws", total, frames[:, :, 2])
-    return WheelOutputs(patches.active, patches.surface, patches.y_wheel, patches.y_rail,
-                        patches.penetration, patches.contact_angle, forces.normal_force,
-                        forces.creep_force_x, forces.creep_force_y, forces.creepage_x,
-                        forces.creepage_y, forces.spin, lateral, vertical)
+    wheels = WheelOutputs(patches.active, patches.surface, patches.y_wheel, patches.y_rail,
+                          patches.penetration, patches.contact_angle, forces.normal_force,
+                          forces.creep_force_x, forces.creep_force_y, forces.creepage_x,
+                          forces.creepage_y, forces.spin, lateral, vertical)
+    return wheels, qddot
+
+
+def _wheel_outputs(vehicle, params, track, q, qdot, rails, model):
+    """WheelOutputs at one state (:func:`_outputs` without the accelerations)."""
+    return _outputs(vehicle, params, track, q, qdot, rails, model)[0]
 
 
 def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t1, ts, options,
@@ -326,8 +340,8 @@ def _results(vehicle, params, track, model, q0, qdot0, rails0, ts, q, qdot, rail
     rails_safe = None if rails is None else jax.tree.map(safe, rails, rails0)
     lateral, vertical, yaw, _, irregularity = jax.vmap(
         lambda a, b: _wheelset_track_coordinates(vehicle, track, a, b))(q_safe, qdot_safe)
-    wheels = jax.lax.map(lambda y: _wheel_outputs(vehicle, params, track, *y, model),
-                         (q_safe, qdot_safe, rails_safe))
+    wheels, qddot = jax.lax.map(lambda y: _outputs(vehicle, params, track, *y, model),
+                                (q_safe, qdot_safe, rails_safe))
     deflection = (jnp.zeros(lateral.shape + (2, 2), dtype=q.dtype) if rails is None
                   else rails_safe[0])
     n_norm = vehicle.system.n_bodies
@@ -338,7 +352,7 @@ def _results(vehicle, params, track, model, q0, qdot0, rails0, ts, q, qdot, rail
     wheels = jax.tree.map(lambda x: nan(x) if jnp.issubdtype(x.dtype, jnp.floating) else x,
                           wheels)
     return SimulationResult(
-        t=ts, q=q, qdot=qdot, valid=valid, wheelset_lateral=nan(lateral),
+        t=ts, q=q, qdot=qdot, qddot=nan(qddot), valid=valid, wheelset_lateral=nan(lateral),
         wheelset_vertical=nan(vertical - rest_vertical), wheelset_yaw=nan(yaw),
         irregularity=nan(irregularity), rail_deflection=nan(deflection), wheels=wheels,
         constraint_violation=nan(violation),

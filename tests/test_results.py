@@ -100,8 +100,9 @@ def synthetic_result():
     q[~valid] = np.inf
     qdot = np.full_like(q, 0.5)
     qdot[~valid] = np.inf
+    qddot = np.where(valid[:, None], 0.25, np.nan) + 0.0 * q
     return SimulationResult(
-        t=t, q=q, qdot=qdot, valid=valid, wheelset_lateral=floats(lateral),
+        t=t, q=q, qdot=qdot, qddot=qddot, valid=valid, wheelset_lateral=floats(lateral),
         wheelset_vertical=floats(np.full((T, W), 1e-5)), wheelset_yaw=floats(np.full((T, W), 2e-4)),
         irregularity=floats(np.full((T, W, 4), 1e-3)), rail_deflection=floats(deflection),
         wheels=wheels, constraint_violation=floats(np.full(T, 1e-9)),
@@ -241,7 +242,7 @@ def test_file_opens_with_h5py_alone_and_has_units_everywhere(results_file):
         "print(len(names), f['contact/normal_force'].attrs['units'], f.attrs['scenario'])\n")
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                          check=True, cwd=os.path.dirname(results_file))
-    assert out.stdout.split() == ["24", "N", "paper-curve"]  # 24 datasets
+    assert out.stdout.split() == ["25", "N", "paper-curve"]  # 25 datasets
 
 
 def test_layout_units_and_attributes(results_file):
@@ -274,6 +275,9 @@ def test_values_round_trip(results_file, result):
     assert np.all(np.isnan(data["time"][~valid]))  # inf left by diffrax -> NaN
     np.testing.assert_array_equal(data["bodies/q"][valid].reshape(7, -1), result.q[valid])
     assert np.all(np.isnan(data["bodies/qdot"][~valid]))
+    np.testing.assert_array_equal(data["bodies/qddot"][valid].reshape(7, -1),
+                                  result.qddot[valid])
+    assert data["units"]["bodies/qddot"].startswith("m/s^2")
     np.testing.assert_array_equal(data["wheelset/lateral"], result.wheelset_lateral)
     for field in ("normal_force", "contact_angle", "y_wheel", "lateral_force", "spin"):
         np.testing.assert_array_equal(data[f"contact/{field}"], getattr(result.wheels, field))

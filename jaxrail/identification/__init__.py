@@ -90,7 +90,7 @@ def simulate_channels(vehicle, params, track, channels, times, *, speed, misalig
                                                          output_count(times, duration)))
     result = solve(vehicle, params, track, duration, speed, misalignment, s0, options=options,
                    adjoint=adjoint, contact_model=contact_model)
-    values = channel_values(channels, vehicle, params, track, result, contact_model)
+    values = channel_values(channels, vehicle, params, track, result)
     return sample(result.t, values, jnp.asarray(times), gaussian_window(cutoff))
 
 

@@ -34,7 +34,6 @@ import numpy as np
 
 from .._files import write_text
 from ..track import to_track_coordinates, track_frame
-from ..vehicles.loads import vehicle_accelerations
 
 _PATTERNS = [
     (re.compile(r"wheelset_(lateral|vertical|yaw)_([1-9]\d*)$"), "wheelset"),
@@ -74,24 +73,28 @@ def check_channels(names, vehicle) -> None:
         _parse(name, vehicle)
 
 
-def _lateral_acceleration(vehicle, params, track, t, q, qdot, body, model):
-    qddot = vehicle_accelerations(vehicle, params, track, t, q, qdot, model)
+def _lateral_acceleration(track, q, qddot, gravity, body):
+    """Lateral accelerometer reading [m/s^2] of ``body``'s centre at one output: its
+    acceleration less gravity along the track frame's lateral axis."""
     position, acceleration = q[7 * body: 7 * body + 3], qddot[7 * body: 7 * body + 3]
     lateral = track_frame(track, to_track_coordinates(track, position)[0])[:, 1]
-    return (acceleration - params.system.gravity) @ lateral
+    return (acceleration - gravity) @ lateral
 
 
-def _acceleration_column(vehicle, params, track, result, body, model):
-    """Lateral accelerometer reading (T,) of ``body`` at the output times."""
-    values = jax.lax.map(lambda x: _lateral_acceleration(vehicle, params, track, *x, body, model),
-                         (result.t, result.q, result.qdot))
+def _acceleration_column(params, track, result, body):
+    """Lateral accelerometer reading (T,) of ``body`` at the output times, from the
+    result's accelerations (NaN after an early stop)."""
+    safe = lambda x: jnp.where(result.valid[:, None], x, 0.0)  # noqa: E731
+    values = jax.lax.map(lambda x: _lateral_acceleration(track, *x, params.system.gravity,
+                                                         body),
+                         (safe(result.q), safe(result.qddot)))
     return jnp.where(result.valid, values, jnp.nan)
 
 
-def channel_values(names, vehicle, params, track, result, contact_model=None):
+def channel_values(names, vehicle, params, track, result):
     """Values (T, C) of the channels ``names`` at the result's output times (traceable;
-    NaN after an early stop); accelerations with the loads of ``contact_model``
-    (:mod:`jaxrail.vehicles.loads`, default the paper's search)."""
+    NaN after an early stop); accelerations from the result's ``qddot`` (the run's own
+    contact model and loads)."""
     columns = []
     for name in names:
         kind, detail = _parse(name, vehicle)
@@ -101,8 +104,7 @@ def channel_values(names, vehicle, params, track, result, contact_model=None):
             field = getattr(result.wheels, f"{detail[0]}_force")
             columns.append(field[:, detail[1], detail[2]])
         else:
-            columns.append(_acceleration_column(vehicle, params, track, result, detail[0],
-                                                contact_model))
+            columns.append(_acceleration_column(params, track, result, detail[0]))
     return jnp.stack(columns, axis=1)
 
 

@@ -6,7 +6,9 @@ draws the samples (:mod:`.sampling`), runs them in chunks (:mod:`.batch`) and re
 :class:`MonteCarlo` whose ``table`` has one row per sample: its inputs and the
 quantities of :mod:`.summary` (maximum lateral displacement, Y/Q against Nadal, Sum Y
 against Prud'homme, maximum normal force, flange contact fraction, wear number,
-status). ``write_table`` writes it as CSV or Parquet.
+status). ``write_table`` writes it as CSV or Parquet; ``study_statistics`` gives the
+study's facts and the min, median and max of every quantity over the successful samples
+(:mod:`.statistics`).
 """
 
 import dataclasses
@@ -19,11 +21,13 @@ from ..vehicles.parameters import PARAMETERS, get_values
 from .batch import run_chunks
 from .checkpoint import Checkpoint, study_key
 from .sampling import DESIGNS, Variation, check_names, draw, parse_variation
+from .statistics import column_statistics, study_statistics, successful
 from .summary import sample_row
 from .table import read_table, write_table
 
-__all__ = ["DESIGNS", "MAX_SAMPLES", "MonteCarlo", "Variation", "check_samples", "draw",
-           "parse_variation", "read_table", "run_montecarlo", "run_samples", "write_table"]
+__all__ = ["DESIGNS", "MAX_SAMPLES", "MonteCarlo", "Variation", "check_samples",
+           "column_statistics", "draw", "parse_variation", "read_table", "run_montecarlo",
+           "run_samples", "study_statistics", "successful", "write_table"]
 
 
 @dataclasses.dataclass

@@ -386,3 +386,23 @@ def test_signal_functions_reject_bad_rates_and_windows():
         sig.sliding_mean(np.ones(10), np.arange(10.0), 2.0, 0.0)
     with pytest.raises(ValueError, match="band-pass edges"):
         sig.butterworth_bandpass(1.0, 8.0, 4.0)
+
+
+def test_assess_command_writes_the_assessment_and_names_what_it_cannot_assess(tmp_path,
+                                                                              capsys):
+    import json
+
+    from jaxrail.cli import main
+
+    path = tmp_path / "run.h5"
+    write_file(path)
+    out = tmp_path / "assessment.json"
+    code = main(["assess", str(path), "--json", str(out), "--static-wheel-load", "80000",
+                 "--max-speed", "160"])
+    data = json.loads(out.read_text())
+    direct = en.assess_file(path, static_wheel_load=80e3, max_speed_kmh=160.0)
+    assert code == (0 if direct["passed"] else 1)
+    assert [c["quantity"] for c in data["checks"]] == [c["quantity"] for c in direct["checks"]]
+    assert "bodies/qddot" in data["en12299"]["not_assessed"]  # a file without accelerations
+    err = capsys.readouterr().err
+    assert "(Y/Q)2m" in err and "EN 12299: not assessed" in err

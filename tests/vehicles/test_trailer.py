@@ -205,3 +205,18 @@ def test_readme_simulation_example_runs(command_run, capsys):
     capsys.readouterr()
     exec(compile(example, "README.md", "exec"), {})
     assert capsys.readouterr().out.startswith("successful 1.0")
+
+
+def test_outputs_hold_the_accelerations_an_accelerometer_reads(command_run):
+    """bodies/qddot against central differences of bodies/qdot for the carbody (smooth
+    above its suspension), and the carbody floor's vertical reading, +g on average."""
+    from jaxrail.standards.floor import floor_accelerations
+
+    _, _, run, _ = command_run
+    t, q, qdot, qddot = (run[k] for k in ("time", "bodies/q", "bodies/qdot", "bodies/qddot"))
+    assert np.all(np.isfinite(qddot))
+    carbody = 0  # the trailer's body order: carbody first
+    central = (qdot[2:, carbody, :3] - qdot[:-2, carbody, :3]) / (t[2:] - t[:-2])[:, None]
+    np.testing.assert_allclose(qddot[1:-1, carbody, :3], central, atol=0.02)
+    vertical = floor_accelerations(q, qdot, qddot, carbody, (0.0, 0.0, -0.8))[:, 2]
+    assert np.mean(vertical) == pytest.approx(9.81, rel=2e-3)

@@ -1,0 +1,76 @@
+"""EN 12299 mean comfort of a run: the carbody floor accelerometers' readings
+(:mod:`jaxrail.standards.floor`) at floor points over the bogies and at the centre,
+from a results file's ``bodies/q``, ``bodies/qdot`` and ``bodies/qddot``, through
+:func:`jaxrail.standards.en12299.mean_comfort`."""
+
+import dataclasses
+
+import numpy as np
+
+from ..vehicles.trailer import trailer_values
+from .en12299 import MEAN_COMFORT_BLOCKS, WINDOW_S, continuous_comfort, mean_comfort
+from .floor import floor_accelerations
+
+FLOOR_HEIGHT_M = 1.2
+"""[m] of the carbody floor above the rail tops [A]: a typical main-line coach (the
+trailer's data hold no floor height)."""
+
+
+def trailer_floor_points(values=None) -> dict:
+    """``{name: point (3,) [m, carbody frame]}`` over the leading bogie, at the centre
+    and over the trailing bogie, on the floor (:data:`FLOOR_HEIGHT_M`), from the
+    trailer's data (``carbody.bogie_half_distance``, ``carbody.height``)."""
+    v = trailer_values() if values is None else values
+    a, z = v["carbody.bogie_half_distance"], FLOOR_HEIGHT_M - v["carbody.height"]
+    return {"over leading bogie": (a, 0.0, z), "centre": (0.0, 0.0, z),
+            "over trailing bogie": (-a, 0.0, z)}
+
+
+def comfort_of_file(path, body="carbody", points=None) -> dict:
+    """Mean comfort N_MV and the largest continuous comfort Cc per axis at each floor
+    ``points`` (default :func:`trailer_floor_points`) of ``body`` in the results file
+    ``path``. Records shorter than the standard's 5 min give an indicative N_MV from
+    the 5 s blocks they hold (``"indicative": true``). ValueError names a missing
+    dataset or body, or a record shorter than one 5 s block."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        missing = [n for n in ("time", "valid", "bodies/q", "bodies/qdot", "bodies/qddot")
+                   if n not in f]
+        if missing:
+            raise ValueError(f"{path}: no EN 12299 comfort without {', '.join(missing)} "
+                             "(results files of jaxrail 0.1 after the accelerations were "
+                             "added to the outputs have them)")
+        names = [n.decode() if isinstance(n, bytes) else str(n)
+                 for n in f["bodies/q"].attrs.get("body_names", [])]
+        if body not in names:
+            raise ValueError(f"{path}: no body named {body!r} in bodies/q (bodies: "
+                             f"{names or 'unnamed'})")
+        valid = f["valid"][()].astype(bool)
+        rows = len(valid) if np.all(valid) else int(np.argmin(valid))
+        time = f["time"][:rows]
+        states = [f[n][:rows] for n in ("bodies/q", "bodies/qdot", "bodies/qddot")]
+    rate = (len(time) - 1) / (time[-1] - time[0]) if len(time) > 1 else 0.0
+    blocks = int(len(time) / rate // WINDOW_S) if rate > 0 else 0
+    out = {"body": body, "sample_rate_hz": rate, "blocks_of_5_s": blocks,
+           "indicative": blocks < MEAN_COMFORT_BLOCKS, "points": {}}
+    for name, point in (trailer_floor_points() if points is None else points).items():
+        reading = floor_accelerations(*states, names.index(body), point)
+        comfort = mean_comfort(*reading.T, rate, min_blocks=max(1, min(
+            blocks, MEAN_COMFORT_BLOCKS)))
+        cc = continuous_comfort(*reading.T, rate)
+        out["points"][name] = {
+            "point_m": [float(x) for x in point], **dataclasses.asdict(comfort),
+            **{f"max_{k}_m_s2": float(np.nanmax(cc[k])) for k in ("cc_x", "cc_y", "cc_z")}}
+    return out
+
+
+def format_comfort(comfort: dict) -> str:
+    """:func:`comfort_of_file`'s result as lines for the terminal."""
+    lines = [f"EN 12299 mean comfort N_MV ({comfort['blocks_of_5_s']} blocks of 5 s"
+             + (", fewer than the standard's 60: indicative" if comfort["indicative"]
+                else "") + f", {comfort['body']} floor)"]
+    for name, point in comfort["points"].items():
+        lines.append(f"  {name:<20} N_MV {point['n_mv']:.2f} ({point['comfort_class']}), "
+                     f"max Cc y {point['max_cc_y_m_s2']:.3f} m/s^2")
+    return "\n".join(lines)
