@@ -24,7 +24,7 @@ CSV_COLUMNS = ("shift_mm", "side", "patch", "y_track_mm", "y_wheel_mm", "rolling
                "contact_angle_rad", "penetration_mm", "roll_rad", "delta_r_mm", "converged")
 # A row is converged when the solve's depth error is below RESIDUAL_TOLERANCE and the
 # deepest patch the search then finds on each wheel is the virtual penetration to within
-# DEPTH_TOLERANCE (S1002 on UIC60 over +-10 mm: within 2e-14 m, but for 1:20 at +6.5 mm).
+# DEPTH_TOLERANCE (S1002 on UIC60 1:40 and 1:20 over +-10 mm in 0.5 mm steps: within 1e-14 m).
 RESIDUAL_TOLERANCE = 1e-9  # [m]
 DEPTH_TOLERANCE = 1e-7  # [m]
 _PATCH_FIELDS = (("y_track_mm", "y_track"), ("y_wheel_mm", "y_wheel"),
