@@ -1,6 +1,7 @@
 """Scenario files: the built-in ones parse and build; bad files are named clearly."""
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -213,3 +214,15 @@ def test_bogie_carries_half_the_carbody():
     assert masses["wheelset_1"] + masses["axlebox_1"] == 1813.0
     preload = np.asarray(params.system.forces["bushing"].preload)[:, 2]
     assert np.allclose(-4 * preload, masses["frame"] * 9.81)  # four primary bushings
+
+
+def test_the_suspended_wheelset_refuses_a_curved_track(tmp_path):
+    text = (Path(__file__).parents[1] / "jaxrail" / "scenarios" / "data"
+            / "suspended-wheelset.toml").read_text()
+    text = text.replace('segments = [{ kind = "straight", length = 400.0 }]',
+                        'segments = [{ kind = "straight", length = 100.0 }, '
+                        '{ kind = "arc", length = 100.0, radius = 1000.0 }]')
+    path = tmp_path / "curved.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=r"straight track only.*segments \[2\]"):
+        load_scenario(str(path)).build()

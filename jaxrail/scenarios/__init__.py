@@ -140,6 +140,12 @@ class Scenario:
             values = trailer_values(self.vehicle_data)
             vehicle, params = (trailer if self.model == "trailer" else bogie)(wheel, rail, values)
         elif self.model == "suspended-wheelset":
+            curved = [k + 1 for k, seg in enumerate(self.segments) if seg["kind"] != "straight"]
+            if curved:
+                raise ValueError(f"{self.source}: [vehicle] model = 'suspended-wheelset' runs "
+                                 f"on straight track only (its frame slides along the "
+                                 f"global x axis); track segments {curved} are not straight")
+            # a data file gives its own values, the primary longitudinal stiffness included
             values = None if self.vehicle_data is None else trailer_values(self.vehicle_data)
             vehicle, params = suspended_wheelset(wheel, rail, values)
         else:

@@ -92,13 +92,16 @@ class LinearStability:
         if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low < high):
             raise ValueError(f"speed range: need 0 < low < high [m/s], got {low}, {high}")
         points = self.sweep(np.linspace(low, high, 5), params) if points is None else points
+        if len(points) < 2:
+            raise ValueError(f"critical speed: need at least 2 points, got {len(points)}")
         for left, right in zip(points[:-1], points[1:]):
             if left.eigenvalue.real < 0.0 <= right.eigenvalue.real:
                 return self._refine(left, right, params)
+        first, last = points[0], points[-1]
         raise ValueError(
-            f"speed range {low:g}-{high:g} m/s does not bracket the hunting mode's "
-            f"crossing: its damping ratio is {points[0].damping_ratio:.4g} at {low:g} m/s "
-            f"and {points[-1].damping_ratio:.4g} at {high:g} m/s")
+            f"speed range {first.speed:g}-{last.speed:g} m/s does not bracket the hunting "
+            f"mode's crossing: its damping ratio is {first.damping_ratio:.4g} at "
+            f"{first.speed:g} m/s and {last.damping_ratio:.4g} at {last.speed:g} m/s")
 
     def _refine(self, a, b, params):
         """Illinois iteration on a bracket ``a`` (Re < 0), ``b`` (Re >= 0)."""
@@ -170,6 +173,10 @@ class LinearStability:
 
         d_av = total(right.real) + 1j * total(right.imag)
         partials = np.real(left.conj() @ d_av / np.vdot(left, right))
+        if not np.all(np.isfinite(partials)) or partials[0] == 0.0:
+            raise ValueError(f"critical speed gradient: the hunting mode's real part does "
+                             f"not cross zero transversally at {point.speed:g} m/s (its "
+                             f"rate with speed is {partials[0]:.3g} 1/s per m/s)")
         return {name: float(-partials[1 + i] / partials[0]) for i, name in enumerate(names)}
 
 

@@ -164,7 +164,8 @@ class Modes:
 
     def hunting(self) -> int:
         """Index of the least damped hunting mode (largest real part among the
-        oscillatory modes, Im > 0, with :data:`HUNTING_SHARE`); ValueError if none."""
+        oscillatory modes, Im > 2 pi :data:`MIN_FREQUENCY_HZ`, with
+        :data:`HUNTING_SHARE`); ValueError if none."""
         candidates = np.flatnonzero((self.eigenvalues.imag > 2 * np.pi * MIN_FREQUENCY_HZ)
                                     & (self.hunting_share >= HUNTING_SHARE))
         if candidates.size == 0:

@@ -42,6 +42,9 @@ def stability_study(vehicle, params, track, low, high, points=9, model=None) -> 
     """The hunting mode at ``points`` speeds over ``[low, high]`` [m/s], the linear
     critical speed there (:meth:`LinearStability.critical_speed`: ValueError if the
     range holds no crossing) and the equivalent conicity at 3 mm."""
+    if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low < high) or points < 2:
+        raise ValueError(f"stability study: need 0 < low < high [m/s] and at least 2 "
+                         f"points, got {low}, {high}, {points}")
     stability = LinearStability(vehicle, params, track, model)
     sweep = stability.sweep(np.linspace(low, high, points))
     critical = stability.critical_speed(low, high, points=sweep)
@@ -75,6 +78,7 @@ def format_study(study: dict) -> str:
         f"linear critical speed: {study['linear_critical_speed_m_s']:.2f} m/s "
         f"({study['linear_critical_speed_km_h']:.1f} km/h), hunting at "
         f"{study['hunting_frequency_hz']:.3f} Hz",
-        "equivalent conicity (EN 15302, 3 mm): "
+        f"equivalent conicity (EN 15302, "
+        f"{1e3 * study['equivalent_conicity_amplitude_m']:g} mm): "
         + ("not covered by +-10 mm" if conicity is None else f"{conicity:.4f}")]
     return "\n".join(lines)

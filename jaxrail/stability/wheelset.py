@@ -6,8 +6,11 @@ for the leading wheelset, from the contact model and the force laws the simulati
 use:
 
 - the rolling radius ``r0`` [m], the half distance ``l0`` [m] between the contact
-  points and the wheel load ``W`` [N] (centred, mean of both wheels);
-- the conicity ``lambda = d(r_left - r_right)/dy / 2`` [-] at y = 0 (the small-amplitude
+  points and the wheel load ``W`` [N] of each wheel's most loaded patch (centred,
+  mean of both wheels; where a wheel has two patches, as S1002 on UIC60 1:40 does,
+  W is that patch's share);
+- the conicity ``lambda = d(r_left - r_right)/dy / 2`` [-] at y = 0 of the radii
+  weighted by each patch's normal force (the small-amplitude
   limit of the EN 15302 equivalent conicity), with the wheelset held at its rest
   pose for its load at each shift, by forward-mode differentiation through that pose;
 - the gravitational stiffness ``k_g = -dF_y/dy`` [N/m] of the normal forces' lateral

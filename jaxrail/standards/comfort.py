@@ -18,8 +18,9 @@ trailer's data hold no floor height)."""
 
 def trailer_floor_points(values=None) -> dict:
     """``{name: point (3,) [m, carbody frame]}`` over the leading bogie, at the centre
-    and over the trailing bogie, on the floor (:data:`FLOOR_HEIGHT_M`), from the
-    trailer's data (``carbody.bogie_half_distance``, ``carbody.height``)."""
+    and over the trailing bogie, on the floor (:data:`FLOOR_HEIGHT_M`), from trailer
+    data (``carbody.bogie_half_distance``, ``carbody.height``; default the built-in
+    Manchester file, whatever data file the run used)."""
     v = trailer_values() if values is None else values
     a, z = v["carbody.bogie_half_distance"], FLOOR_HEIGHT_M - v["carbody.height"]
     return {"over leading bogie": (a, 0.0, z), "centre": (0.0, 0.0, z),
@@ -51,7 +52,7 @@ def comfort_of_file(path, body="carbody", points=None) -> dict:
         time = f["time"][:rows]
         states = [f[n][:rows] for n in ("bodies/q", "bodies/qdot", "bodies/qddot")]
     rate = (len(time) - 1) / (time[-1] - time[0]) if len(time) > 1 else 0.0
-    blocks = int(len(time) / rate // WINDOW_S) if rate > 0 else 0
+    blocks = len(time) // round(WINDOW_S * rate) if rate > 0 else 0  # as en12299 counts
     out = {"body": body, "sample_rate_hz": rate, "blocks_of_5_s": blocks,
            "indicative": blocks < MEAN_COMFORT_BLOCKS, "points": {}}
     for name, point in (trailer_floor_points() if points is None else points).items():

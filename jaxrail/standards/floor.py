@@ -9,7 +9,9 @@ import numpy as np
 
 from ..multibody import quaternion as qt
 
-GRAVITY = np.array([0.0, 0.0, -9.81])  # [m/s^2] global, the vehicles' gravity
+from ..vehicles.trailer import GRAVITY as _G
+
+GRAVITY = np.array([0.0, 0.0, -_G])  # [m/s^2] global, the vehicles' gravity
 
 
 def floor_accelerations(q, qdot, qddot, body: int, point, gravity=GRAVITY) -> np.ndarray:

@@ -1,9 +1,10 @@
 """A suspended single wheelset: the textbook model of hunting stability (Wickens).
 
 One wheelset tied by a primary suspension (the trailer's, softer longitudinally:
-:data:`LONGITUDINAL_STIFFNESS`) (longitudinal and lateral springs,
-the vertical damper, at +-``axlebox.half_span`` either side of the track centreline) to a
-frame that moves along the track. The frame slides along the global x axis on a
+:data:`LONGITUDINAL_STIFFNESS`; longitudinal and lateral springs, the vertical damper,
+and the small pitch spring and damper that hold the axlebox body about the axle) at
++-``axlebox.half_span`` either side of the track centreline to a frame that moves along
+the track. The frame slides along the global x axis on a
 prismatic joint to the ground (the straight track's direction): it neither rolls,
 yaws nor moves sideways or vertically, so the wheelset's lateral and yaw motion meets
 the yaw stiffness ``2 k_x b^2`` and the lateral stiffness ``2 k_y`` of a frame that
