@@ -24,7 +24,7 @@ import jax
 import jax.numpy as jnp
 
 from ..contact.polach import polach
-from ..vehicles.initial import _wheelset_contact, wheelset_rest_pose
+from ..vehicles.initial import _wheelset_contact, wheelset_load, wheelset_rest_pose
 from ..vehicles.loads import resolve_contact_model
 from ..track import track_frame
 
@@ -50,8 +50,7 @@ def wheelset_coefficients(vehicle, params, track, speed, s=None, model=None) -> 
     wheelset, rolling at ``speed`` [m/s]. Traceable (jit it)."""
     model = resolve_contact_model(model)
     s = jnp.asarray(10.0 if s is None else s, jnp.float64)
-    g = params.system.gravity[2]
-    load = -jnp.sum(params.system.bodies.mass) * g / vehicle.n_wheelsets
+    load = wheelset_load(vehicle, params)
     shift = lambda y: _at_shift(vehicle, params, track, s, load, speed, model, y)  # noqa: E731
     (dr, fy, patches, forces), (d_dr, d_fy, _, _) = jax.jvp(
         shift, (jnp.asarray(0.0),), (jnp.asarray(1.0),))

@@ -20,8 +20,8 @@ standard itself is not public). Clause numbers are EN 14363:2016's as recalled [
 
 import numpy as np
 
-from .en14363_signals import (bandpass, check_distance, dominant_frequency, lowpass,
-                              percentile, sample_rate, sliding_mean, sliding_rms,
+from .en14363_signals import (bandpass, check_distance, check_finite, dominant_frequency,
+                              lowpass, percentile, sample_rate, sliding_mean, sliding_rms,
                               two_sided_extreme)
 
 STANDARD = "EN 14363:2016+A1:2018"  # [V-src: BSI shop page for BS EN 14363:2016+A1:2018]
@@ -164,10 +164,7 @@ def _channels(name, values, n_samples):
     if a.ndim != 2 or a.shape[0] != n_samples:
         raise ValueError(f"{name}: expected shape ({n_samples},) or ({n_samples}, k), got "
                          f"{np.shape(values)}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name}: {np.count_nonzero(~np.isfinite(a))} samples are not "
-                         "finite")
-    return a
+    return check_finite(name, a)
 
 
 def _forces(name, values, n_samples):
@@ -177,10 +174,7 @@ def _forces(name, values, n_samples):
     if x.ndim != 3 or x.shape[0] != n_samples or x.shape[2] != 2:
         raise ValueError(f"{name}: expected shape ({n_samples}, wheelsets, 2), got "
                          f"{x.shape}")
-    if not np.all(np.isfinite(x)):
-        raise ValueError(f"{name}: {np.count_nonzero(~np.isfinite(x))} samples are not "
-                         "finite")
-    return x
+    return check_finite(name, x)
 
 
 def _validate(time, distance, y, q, options):

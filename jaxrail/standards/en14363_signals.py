@@ -37,6 +37,14 @@ UNIFORM_SAMPLING_TOLERANCE = 1e-6
 SETTLING_PERIODS = 10.0
 
 
+
+def check_finite(name, x):
+    """``x``, or ValueError naming ``name`` and how many samples are not finite."""
+    if not np.all(np.isfinite(x)):
+        raise ValueError(f"{name}: {np.count_nonzero(~np.isfinite(x))} samples are not "
+                         "finite")
+    return x
+
 def _f64(x):
     return np.asarray(x, dtype=np.float64)
 
@@ -48,9 +56,7 @@ def sample_rate(time) -> float:
     if t.ndim != 1 or len(t) < 2:
         raise ValueError(f"time: expected a 1-D array of at least 2 samples, got shape "
                          f"{t.shape}")
-    if not np.all(np.isfinite(t)):
-        raise ValueError(f"time: {np.count_nonzero(~np.isfinite(t))} samples are not "
-                         "finite")
+    check_finite("time", t)
     dt = np.diff(t)
     if np.any(dt <= 0.0):
         k = int(np.argmax(dt <= 0.0))
@@ -140,9 +146,7 @@ def check_distance(distance, n_samples, needed=None, what=""):
     if s.shape != (n_samples,):
         raise ValueError(f"distance: expected shape ({n_samples},) like time, got "
                          f"{s.shape}")
-    if not np.all(np.isfinite(s)):
-        raise ValueError(f"distance: {np.count_nonzero(~np.isfinite(s))} samples are not "
-                         "finite")
+    check_finite("distance", s)
     if np.any(np.diff(s) < 0.0):
         k = int(np.argmax(np.diff(s) < 0.0))
         raise ValueError(f"distance: decreases at sample {k + 1} ({s[k]!r} m, then "

@@ -139,6 +139,12 @@ def _rest_pose_jvp(vehicle, primals, tangents):
     return (height, roll, radius), (d_pose[0], d_pose[1], d_radius + radius_by_pose @ d_pose)
 
 
+def wheelset_load(vehicle: Vehicle, params: VehicleParams):
+    """The vehicle's weight per wheelset [N]: what each wheelset carries at rest."""
+    weight = -jnp.sum(params.system.bodies.mass) * params.system.gravity[2]
+    return weight / vehicle.n_wheelsets
+
+
 def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalignment=0.0,
                   s0=None, model=None):
     """``(q0, qdot0)`` of the vehicle at rest on the track, rolling at ``speed`` [m/s].
@@ -159,8 +165,7 @@ def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalig
     speed = jnp.asarray(speed, dtype=jnp.float64)
     misalignment = jnp.asarray(misalignment, dtype=jnp.float64)
     wheelsets = np.asarray(vehicle.wheelsets)
-    mass = params.system.bodies.mass
-    load = -jnp.sum(mass) * params.system.gravity[2] / len(wheelsets)
+    load = wheelset_load(vehicle, params)
     alignment = lambda s: track_irregularity(track, s)[0]  # noqa: E731
     stations = s0 + layout[wheelsets, 0]
     shift = lambda s: misalignment + alignment(s)  # noqa: E731
