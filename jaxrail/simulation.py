@@ -35,6 +35,7 @@ from .multibody.imex import IMEX
 from .track import to_track_coordinates, track_frame
 from .track.irregularity import rail_offsets
 from .track.rails import HALF_TAPING_DISTANCE, track_irregularity
+from .vehicles.drive import check_drive
 from .vehicles.initial import initial_state
 from .vehicles.loads import VehicleLoads, contact_loads, resolve_contact_model
 from .vehicles.vehicle import Vehicle, VehicleParams, wheelset_states
@@ -397,7 +398,7 @@ def _saved_states(sol, start):
 def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignment=0.0,
           s0=None, options: SolverOptions = SolverOptions(),
           limits: DerailmentLimits | None = None, solver=None, adjoint=None,
-          initial=None, contact_model=None, report_progress=False):
+          initial=None, contact_model=None, report_progress=False, drive=None):
     """The traceable core of :func:`simulate` (jit, vmap and grad it): returns a
     :class:`SimulationResult` without host timings. ``t1`` [s], ``speed`` [m/s] and
     ``misalignment`` [m] may be traced. ``initial``: ``(q0, qdot0)`` (and on a flexible
@@ -408,9 +409,10 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
     (:func:`simulate` draws the bar). ``limits``: :class:`DerailmentLimits` (default
     ones). ``report_progress``: pass each step's time to the host
     (:mod:`jaxrail._time_report`; it changes no value), as :func:`simulate` does for
-    its progress bar."""
+    its progress bar. ``drive``: a :class:`~jaxrail.vehicles.drive.SpeedDrive` holding
+    the speed to its programme (default None: the vehicle coasts)."""
     limits = DerailmentLimits() if limits is None else limits
-    loads = VehicleLoads(vehicle, params, track, resolve_contact_model(contact_model))
+    loads = VehicleLoads(vehicle, params, track, resolve_contact_model(contact_model), drive)
     q0, qdot0, rails0 = _start(vehicle, params, track, speed, misalignment, s0, initial,
                                loads.model)
     lateral0, _, _, rest_heights, irregularity0 = _wheelset_track_coordinates(vehicle, track,
@@ -493,12 +495,14 @@ def warn_beyond_track(track, span) -> None:
 def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: float,
              misalignment: float = 0.0, s0=None, options: SolverOptions = SolverOptions(),
              limits: DerailmentLimits | None = None, initial=None,
-             solver=None, contact_model=None) -> SimulationResult:
+             solver=None, contact_model=None, drive=None) -> SimulationResult:
     """Run a vehicle along a track for ``t1`` [s] at ``speed`` [m/s] from static
     equilibrium, shifted ``misalignment`` [m] to the left (or from ``initial`` =
     ``(q0, qdot0)``); see the module docstring. ``solver``: a diffrax solver (default
     ``options.solver()``). ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's
-    search, :class:`~jaxrail.vehicles.OnlineContact`).
+    search, :class:`~jaxrail.vehicles.OnlineContact`). ``drive``: a
+    :class:`~jaxrail.vehicles.drive.SpeedDrive` that holds the speed to a programme
+    (default None: the vehicle coasts from ``speed``).
 
     The compiled programs (initial equilibrium, integration, outputs) are cached: a
     second call with the same vehicle structure and options does not recompile,
@@ -512,6 +516,8 @@ def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: f
     and compile times [s].
     """
     start = time.perf_counter()
+    if drive is not None:
+        check_drive(drive, vehicle.system.n_bodies)
     if initial is None:
         warn_beyond_track(track, run_span(params, speed, t1, s0))
     limits = DerailmentLimits() if limits is None else limits
@@ -528,7 +534,7 @@ def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: f
     arguments = (vehicle, params, track, t1, speed, misalignment, s0)
     static = dict(options=dataclasses.replace(options, progress=False), limits=limits,
                   initial=initial, solver=solver, contact_model=contact_model,
-                  report_progress=True)
+                  report_progress=True, drive=drive)
     run = timer.compile(solve, *arguments, **static)
     if options.progress:
         with SimulatedTimeBar(float(t1)) as bar, listening(bar.update):

@@ -49,16 +49,17 @@ NULL_TOLERANCE = 1e-9  # relative singular value below which a constraint row is
 
 def check_track(track) -> None:
     """ValueError unless ``track`` is an ideal, rigid, straight track (the steady motion
-    is a relative equilibrium there only)."""
+    is a relative equilibrium there only; the nonlinear methods' drive pushes along the
+    straight's direction)."""
     if getattr(track, "irregularity", None) is not None:
-        raise ValueError("linear stability needs the ideal track: this track has "
+        raise ValueError("the stability analysis needs the ideal track: this track has "
                          "irregularities (track.with_irregularity(None))")
     if getattr(track, "support", None) is not None:
-        raise ValueError("linear stability is for rigid rails: this track is flexible "
+        raise ValueError("the stability analysis is for rigid rails: this track is flexible "
                          "(track.with_support(None))")
     if any(kind != "straight" for kind in track.kinds):
-        raise ValueError(f"linear stability is implemented on straight track only: this "
-                         f"track's segments are {list(track.kinds)}")
+        raise ValueError(f"the stability analysis is implemented on straight track only: "
+                         f"this track's segments are {list(track.kinds)}")
 
 
 def _small_rotation(theta):

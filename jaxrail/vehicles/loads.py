@@ -220,16 +220,23 @@ class VehicleLoads(eqx.Module):
     torques ``(n, 3)`` [N, N m], global, at the body centres.
 
     Fields: vehicle, params (:class:`VehicleParams`, traced), track, model (the
-    contact model).
+    contact model), drive (a :class:`~jaxrail.vehicles.drive.SpeedDrive` holding the
+    speed, or None: the vehicle coasts).
     """
 
     vehicle: Vehicle
     params: VehicleParams
     track: object
     model: object = eqx.field(default_factory=OnlineContact)
+    drive: object = None
+
+    def _driven(self, t, qdot, forces):
+        return forces if self.drive is None else self.drive.add_to(t, qdot, forces)
 
     def __call__(self, t, q, qdot):
-        return contact_loads(self.vehicle, self.params, self.track, q, qdot, self.model)[:2]
+        forces, torques = contact_loads(self.vehicle, self.params, self.track, q, qdot,
+                                        self.model)[:2]
+        return self._driven(t, qdot, forces), torques
 
     def coupled(self, t, q, qdot, rails):
         """On a flexible track (``track.support``): ``(forces, torques, (wdot,
@@ -238,7 +245,8 @@ class VehicleLoads(eqx.Module):
         from one contact evaluation."""
         forces, torques, patches, patch_forces = contact_loads(
             self.vehicle, self.params, self.track, q, qdot, self.model, rails)
-        return forces, torques, _rails_rate(self.track, rails, patches, patch_forces)
+        return (self._driven(t, qdot, forces), torques,
+                _rails_rate(self.track, rails, patches, patch_forces))
 
     def linearised(self, t, q, qdot, rails=None):
         """``(forces, torques, bodies, blocks)``: the loads of ``__call__``, the
@@ -252,6 +260,9 @@ class VehicleLoads(eqx.Module):
         (:class:`~jaxrail.track.flexible.FlexibleTrack`) by the same columns."""
         forces, torques, patches, patch_forces = contact_loads(
             self.vehicle, self.params, self.track, q, qdot, self.model, rails)
+        rails_rate = None if rails is None else _rails_rate(self.track, rails, patches,
+                                                            patch_forces)
+        forces = self._driven(t, qdot, forces)
         index = np.asarray(self.vehicle.wheelsets)
         bodies = q.reshape(-1, 7)[index], qdot.reshape(-1, 7)[index], torques[index]
         contact = self.params.contact
@@ -268,8 +279,7 @@ class VehicleLoads(eqx.Module):
         own = jnp.zeros((4, 22)).at[:, 7:11].set(-jnp.diag(stiffness)).at[:, 18:22].set(
             -jnp.diag(damping))
         rail_rows = (on_rails + own) / mass[:, None]
-        return (forces, torques, _rails_rate(self.track, rails, patches, patch_forces),
-                self.vehicle.wheelsets, blocks, rail_rows)
+        return forces, torques, rails_rate, self.vehicle.wheelsets, blocks, rail_rows
 
 
 def vehicle_accelerations(vehicle: Vehicle, params: VehicleParams, track, t, q, qdot,
