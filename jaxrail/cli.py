@@ -377,7 +377,9 @@ def _tables_command(args):
 
 def _stability_command(args):
     from .scenarios import load_scenario
-    from .stability.report import format_study, speed_range, stability_study
+    from .simulation import SolverOptions
+    from .stability.report import (format_nonlinear, format_study, nonlinear_study,
+                                   speed_range, stability_study)
     from .vehicles import contact_model
 
     scenario = load_scenario(args.scenario)
@@ -385,6 +387,10 @@ def _stability_command(args):
                  else (0.25 * scenario.speed, 3.0 * scenario.speed))
     if args.points < 2:
         raise ValueError(f"--points {args.points}: need at least 2 speeds")
+    nonlinear = None if args.nonlinear is None else speed_range(args.nonlinear, "--nonlinear")
+    if not (args.ramp_rate > 0.0 and args.resolution > 0.0):
+        raise ValueError(f"--ramp-rate {args.ramp_rate:g} and --resolution "
+                         f"{args.resolution:g} must be > 0")
     vehicle, params, track = scenario.build()
     model = (contact_model(args.contact, vehicle, params, progress=not args.quiet)
              if args.contact == "table" else None)
@@ -394,12 +400,29 @@ def _stability_command(args):
                             low, high, args.points, model)
     study["scenario"] = scenario.name
     print(format_study(study), file=sys.stderr)
+    if nonlinear is not None:
+        print(f"nonlinear critical speed over {nonlinear[0]:g}-{nonlinear[1]:g} m/s: "
+              "ramp-down, then brute force (minutes) ...", file=sys.stderr)
+        options = SolverOptions(rtol=scenario.rtol, atol=scenario.atol, integrator="imex")
+        say = None if args.quiet else (lambda line: print(line, file=sys.stderr))
+        study["nonlinear"] = nonlinear_study(
+            vehicle, params, track.with_irregularity(None).with_support(None), *nonlinear,
+            rate=args.ramp_rate / 3.6, resolution=args.resolution, options=options,
+            model=model, progress=say)
+        print(format_nonlinear(study["nonlinear"]), file=sys.stderr)
     _emit_json(study, args.json)
     if args.plot:
         from .plots.stability import plot_root_locus
 
         plot_root_locus(study, args.plot)
         print(f"wrote {args.plot}", file=sys.stderr)
+        if nonlinear is not None:
+            from .plots.stability import plot_bifurcation
+
+            path = Path(args.plot)
+            path = path.with_name(f"{path.stem}-nonlinear{path.suffix or '.png'}")
+            plot_bifurcation(study["nonlinear"], path, study["linear_critical_speed_m_s"])
+            print(f"wrote {path}", file=sys.stderr)
     return 0
 
 
@@ -612,8 +635,9 @@ def build_parser():
     _quiet_option(tables)
     tables.set_defaults(run=_tables_command)
     stability = commands.add_parser(
-        "stability", help="linear stability: the hunting mode against speed and the "
-                          "linear critical speed (straight, ideal, rigid track)")
+        "stability", help="stability: the hunting mode against speed, the linear critical "
+                          "speed and, with --nonlinear, the nonlinear one (straight, ideal, "
+                          "rigid track)")
     _scenario_argument(stability, "a built-in scenario (e.g. suspended-wheelset) or a scenario "
                                   ".toml file (its vehicle, profiles and friction)")
     stability.add_argument("--speeds", help="speed range LO:HI [m/s] holding the crossing "
@@ -621,9 +645,18 @@ def build_parser():
     stability.add_argument("--points", type=int, default=9,
                            help="speeds of the root locus over the range (default 9)")
     _json_option(stability, "--json", "study as JSON")
-    stability.add_argument("--plot", help="write the root locus figure (PNG) here")
+    stability.add_argument("--plot", help="write the root locus figure (PNG) here; with "
+                                          "--nonlinear also the bifurcation diagram beside "
+                                          "it (NAME-nonlinear.png)")
     stability.add_argument("--contact", choices=CONTACT_MODES, default="online",
                            help="contact model (default: the paper's search)")
+    stability.add_argument("--nonlinear", metavar="LO:HI",
+                           help="also the nonlinear critical speed in LO:HI [m/s]: ramp-down "
+                                "from HI, then brute force (minutes of simulation)")
+    stability.add_argument("--ramp-rate", type=float, default=5.0,
+                           help="ramp-down rate [km/h per s] (default 5, GENSYS's example)")
+    stability.add_argument("--resolution", type=float, default=0.5,
+                           help="brute force's speed resolution [m/s] (default 0.5)")
     _quiet_option(stability)
     stability.set_defaults(run=_stability_command)
 

@@ -55,6 +55,10 @@ BAD_INPUTS = [
      "--speeds '90:40': give LO:HI in m/s with 0 < LO < HI"),
     (["stability", "suspended-wheelset", "--points", "1"], "--points 1: need at least 2"),
     (["stability", "nofile.toml"], "unknown scenario 'nofile.toml'"),
+    (["stability", "suspended-wheelset", "--nonlinear", "95:65"],
+     "--nonlinear '95:65': give LO:HI in m/s with 0 < LO < HI"),
+    (["stability", "suspended-wheelset", "--nonlinear", "65:95", "--ramp-rate", "0"],
+     "--ramp-rate 0 and --resolution 0.5 must be > 0"),
 ]
 
 

@@ -1,6 +1,7 @@
-"""The linear stability study of a scenario's vehicle: the hunting mode over a speed
-range (the root locus), the linear critical speed and the EN 15302 equivalent conicity,
-as a JSON-ready dict and a terminal table (what ``jaxrail stability`` prints)."""
+"""The stability study of a scenario's vehicle: the hunting mode over a speed range
+(the root locus), the linear critical speed and the EN 15302 equivalent conicity, and
+on request the nonlinear critical speed by both methods, as JSON-ready dicts and
+terminal tables (what ``jaxrail stability`` prints)."""
 
 import math
 
@@ -9,21 +10,24 @@ import numpy as np
 from ..geometry import wheelset_geometry
 from ..geometry.report import conicity_entries
 from ..vehicles import get_values
+from ..simulation import SolverOptions
+from ..track import straight_track
 from .critical import LinearStability
+from .nonlinear import GENSYS_RATE, brute_force, check_straight_x, ramp_down
 
 CONICITY_AMPLITUDE_M = 3e-3  # [m] amplitude of the reported equivalent conicity
 _SHIFTS = np.round(np.arange(-10.0, 10.0 + 1e-9, 0.1), 9) * 1e-3  # [m] for the conicity
 
 
-def speed_range(text: str) -> tuple[float, float]:
-    """``(low, high)`` [m/s] of ``LO:HI``; ValueError names ``--speeds``."""
+def speed_range(text: str, option: str = "--speeds") -> tuple[float, float]:
+    """``(low, high)`` [m/s] of ``LO:HI``; ValueError names ``option``."""
     parts = text.split(":")
     try:
         low, high = (float(p) for p in parts) if len(parts) == 2 else (math.nan, math.nan)
     except ValueError:
         low = high = math.nan
     if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low < high):
-        raise ValueError(f"--speeds {text!r}: give LO:HI in m/s with 0 < LO < HI, e.g. 20:150")
+        raise ValueError(f"{option} {text!r}: give LO:HI in m/s with 0 < LO < HI, e.g. 20:150")
     return low, high
 
 
@@ -81,4 +85,53 @@ def format_study(study: dict) -> str:
         f"equivalent conicity (EN 15302, "
         f"{1e3 * study['equivalent_conicity_amplitude_m']:g} mm): "
         + ("not covered by +-10 mm" if conicity is None else f"{conicity:.4f}")]
+    return "\n".join(lines)
+
+
+def nonlinear_study(vehicle, params, track, low, high, rate=GENSYS_RATE, resolution=0.5,
+                    hold=2.0, options=None, model=None, progress=None) -> dict:
+    """The nonlinear critical speed over ``[low, high]`` [m/s] by both methods
+    (:mod:`jaxrail.stability.nonlinear`): the ramp-down from ``high`` to ``low`` at
+    ``rate`` [m/s^2] after ``hold`` [s], and brute force to ``resolution`` [m/s], on a
+    straight of ``track``'s rail centre distance long enough for the ramp.
+    ``nonlinear_critical_speed_m_s`` is the brute force's (constant speeds, the
+    definition); the ramp-down's is beside it with their relative difference."""
+    check_straight_x(track)
+    options = SolverOptions(integrator="imex") if options is None else options
+    length = 100.0 + high * (hold + (high - low) / rate)
+    long = straight_track(length, rail_centre_distance=track.rail_centre_distance)
+    ramp = ramp_down(vehicle, params, long, high, low, rate=rate, hold=hold, options=options,
+                     contact_model=model)
+    if progress is not None:
+        progress(f"ramp-down: {ramp['status']}")
+    brute = brute_force(vehicle, params, long, low, high, resolution=resolution, hold=hold,
+                        options=options, contact_model=model, progress=progress)
+    speeds = ramp["critical_speed_m_s"], brute["critical_speed_m_s"]
+    return {
+        "nonlinear_critical_speed_m_s": speeds[1],
+        "nonlinear_critical_speed_km_h": None if speeds[1] is None else 3.6 * speeds[1],
+        "ramp_down_critical_speed_m_s": speeds[0],
+        "ramp_down_relative_to_brute_force": (None if None in speeds
+                                              else speeds[0] / speeds[1] - 1.0),
+        "ramp_down": ramp,
+        "brute_force": brute,
+    }
+
+
+def format_nonlinear(study: dict) -> str:
+    """The nonlinear study as lines for the terminal."""
+    ramp, brute = study["ramp_down"], study["brute_force"]
+    cycle = ramp["attractor_at_start_speed"]
+    speed = lambda v: "not found" if v is None else f"{v:.2f} m/s ({3.6 * v:.1f} km/h)"  # noqa: E731
+    lines = [f"attractor at {ramp['start_speed_m_s']:g} m/s: {cycle['kind']}"
+             + (f", amplitude {1e3 * cycle['amplitude_m']:.2f} mm at "
+                f"{cycle['frequency_hz']:.2f} Hz" if cycle["kind"] == "hunting limit cycle"
+                else ""),
+             f"ramp-down ({ramp['rate_km_h_per_s']:g} km/h per s): "
+             f"{speed(ramp['critical_speed_m_s'])}, {ramp['status']}",
+             f"brute force (to {brute['resolution_m_s']:g} m/s): "
+             f"{speed(brute['critical_speed_m_s'])}, {brute['status']}"]
+    if brute["bracket_m_s"] is not None:
+        lines[-1] += (f", dies at {brute['bracket_m_s'][0]:.2f}, hunts at "
+                      f"{brute['bracket_m_s'][1]:.2f} m/s")
     return "\n".join(lines)
