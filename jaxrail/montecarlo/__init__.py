@@ -157,7 +157,8 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
     def collect(start, stop, result):
         for i in range(start, stop):
             one = jax.tree.map(lambda x: x[i - start], result)
-            rows[i] = sample_row(one, friction[i], speed[i])
+            rows[i] = sample_row(one, friction[i], speed[i],
+                                 vehicle.system.body_names)
         if saved is not None:
             saved.add({i: rows[i] for i in range(start, stop)})
         if keep_results:

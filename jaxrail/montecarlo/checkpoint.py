@@ -18,7 +18,7 @@ import numpy as np
 
 from .._files import write_text
 
-FORMAT = "jaxrail montecarlo checkpoint 1"
+FORMAT = "jaxrail montecarlo checkpoint 2"  # 2: the EN 14363 and EN 12299 columns
 
 
 def study_key(scenario, samples: dict, duration, contact, chunk) -> str:

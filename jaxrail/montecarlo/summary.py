@@ -22,14 +22,37 @@ Columns (W wheelsets, K = 1..W leading first, SIDE = left/right):
   patch on the flange (contact angle above 0.6 rad);
 - ``wear_number_K_SIDE_N``: the wheel's wear number T gamma = sum over patches of
   |F_x gamma_x| + |F_y gamma_y| [N = J/m], averaged over the reached output times
-  (the spin moment term is left out: the creep laws give no spin moment).
+  (the spin moment term is left out: the creep laws give no spin moment);
+- EN 14363 (:func:`en14363_row`): per check of
+  :func:`jaxrail.standards.en14363.assess_channels` on straight track, a value column
+  ``en14363_<quantity>_<where>[_N]`` and a ratio column (value / limit)
+  ``en14363_<quantity>_<where>_ratio``: ``y_over_q_2m`` and ``qmax`` per wheel
+  (``wheelset_K_SIDE``), ``sum_y_2m`` and ``sum_y_rms`` per wheelset
+  (``wheelset_K``); ``en14363_passed`` (1 no assessed check fails, 0 one does) and
+  ``en14363_max_ratio`` (the largest ratio of the assessed checks);
+- EN 12299 (:func:`en12299_row`), for a vehicle with a ``carbody``:
+  ``en12299_nmv_<point>`` the mean comfort N_MV at each floor point of
+  :func:`jaxrail.standards.comfort.trailer_floor_points` (``over_leading_bogie``,
+  ``centre``, ``over_trailing_bogie``), indicative from the whole 5 s blocks the
+  record holds.
+
+The standards' columns are NaN where the record is too short for them: the EN 14363
+ones all when fewer than 2 m were travelled (the 2 m sliding means), the output rate
+is under 40 Hz (the 20 Hz force low-pass) or a force is not finite; ``sum_y_rms``
+under 100 m (its sliding rms); N_MV under one 5 s block. Their names come from the
+vehicle (wheelsets, bodies), never from which values a run gave, so every row of a
+study has the same columns.
 """
+
+import re
 
 import numpy as np
 
 from ..results import (MIN_VERTICAL_FORCE_N, SIDES, _masked_max, derailment_ratio,
                        nadal_forces, nadal_limit, summarize)
-from ..standards import en14363
+from ..standards import comfort, en14363
+from ..standards.en14363_signals import sample_rate
+from ..standards.from_result import comfort_states, result_channels
 
 SLIDING_WINDOW_M = en14363.SLIDING_MEAN_WINDOW_M  # [m] of Y/Q and the track shifting force
 
@@ -83,9 +106,118 @@ def _finite_max(x):
     return np.nan if best is None else best
 
 
-def sample_row(result, friction, speed) -> dict:
-    """The table row (without the inputs) of one unbatched run: see the module
-    docstring. NaN where a quantity has no value (e.g. nothing reached)."""
+def snake(text: str) -> str:
+    """``text`` as a snake_case column name part: "(Y/Q)2m" -> "y_over_q_2m"."""
+    return "_".join(re.findall(r"[a-z0-9]+", text.replace("/", " over ").lower()))
+
+
+# EN 14363 checks of straight track in the table: (quantity, units) as
+# en14363.assess_channels names them, per wheel and per wheelset.
+EN14363_WHEEL_CHECKS = (("(Y/Q)2m", "1"), ("Qmax", "N"))
+EN14363_WHEELSET_CHECKS = (("(Sum Y)2m", "N"), ("(Sum Y)rms", "N"))
+
+
+def en14363_column(check: dict) -> tuple[str, str]:
+    """(value column, ratio column) of an EN 14363 ``check`` (its quantity, where and
+    units)."""
+    base = f"en14363_{snake(check['quantity'])}_{snake(check['where'])}"
+    unit = {"1": "", "N": "_N"}.get(check["units"], f"_{snake(check['units'])}")
+    return base + unit, base + "_ratio"
+
+
+def en14363_columns(n_wheelsets: int) -> list[str]:
+    """The EN 14363 column names of a vehicle of ``n_wheelsets`` (module docstring)."""
+    checks = [(q, f"wheelset {k} {side}", u) for k in range(1, n_wheelsets + 1)
+              for side in SIDES for q, u in EN14363_WHEEL_CHECKS]
+    checks += [(q, f"wheelset {k}", u) for k in range(1, n_wheelsets + 1)
+               for q, u in EN14363_WHEELSET_CHECKS]
+    names = [name for q, where, u in checks
+             for name in en14363_column({"quantity": q, "where": where, "units": u})]
+    return names + ["en14363_passed", "en14363_max_ratio"]
+
+
+def _en14363_channels(result, body_names):
+    """The run's EN 14363 channels (:func:`jaxrail.standards.from_result.result_channels`),
+    None where the record cannot be assessed: fewer than 2 valid rows, forces or path
+    not finite, times not uniform or under twice the force low-pass, less than 2 m
+    travelled."""
+    if en14363.leading_wheelset_body(body_names) is None \
+            or en14363.valid_rows(result.valid) < 2:
+        return None
+    channels = result_channels(result, body_names)
+    if not all(np.all(np.isfinite(channels[k])) for k in ("time", "distance", "y", "q")):
+        return None
+    try:
+        rate = sample_rate(channels["time"])
+    except ValueError:  # not uniform: the filters cannot run
+        return None
+    s = channels["distance"]
+    if rate < 2.0 * en14363.FORCE_LOWPASS_HZ or s[-1] - s[0] < SLIDING_WINDOW_M:
+        return None
+    return channels
+
+
+def en14363_row(result, speed, body_names) -> dict:
+    """The EN 14363 columns (module docstring) of one run at ``speed`` [m/s], whose
+    vehicle's bodies are ``body_names``. Q0 is each wheelset's mean wheel load at t = 0
+    (as ``prudhomme_limit_K_N``), the permissible speed the sample's; straight track
+    limits; the instability rms only over 100 m or more. NaN where not assessable."""
+    n_wheelsets = np.shape(result.wheels.vertical_force)[1]
+    row = dict.fromkeys(en14363_columns(n_wheelsets), np.nan)
+    channels = _en14363_channels(result, body_names)
+    if channels is None:
+        return row
+    s, first = channels["distance"], channels["q"][0]
+    load = 0.5 * np.sum(first, axis=1)
+    assessment = en14363.assess_channels(
+        channels["time"], s, channels["y"], channels["q"],
+        static_wheel_load=load if np.all(load > 0.0) else None,
+        max_speed_kmh=3.6 * float(speed),
+        assess_instability=bool(s[-1] - s[0] >= en14363.INSTABILITY_WINDOW_M))
+    ratios = []
+    for check in assessment["checks"]:
+        value, ratio = en14363_column(check)
+        if value in row:  # the curve-only checks (not assessed here) have no column
+            row[value] = np.nan if check["value"] is None else check["value"]
+            row[ratio] = np.nan if check["ratio"] is None else check["ratio"]
+        if check["ratio"] is not None:
+            ratios.append(check["ratio"])
+    row["en14363_passed"] = float(assessment["passed"])
+    row["en14363_max_ratio"] = max(ratios) if ratios else np.nan
+    return row
+
+
+def en12299_columns(body_names) -> list[str]:
+    """The EN 12299 column names: one per floor point where the vehicle has a
+    ``carbody``, none otherwise."""
+    if "carbody" not in body_names:
+        return []
+    return [f"en12299_nmv_{snake(name)}" for name in comfort.trailer_floor_points()]
+
+
+def en12299_row(result, body_names) -> dict:
+    """The EN 12299 columns (module docstring) of one run whose vehicle's bodies are
+    ``body_names``: N_MV at the carbody floor points, NaN for a record under one 5 s
+    block or with states not finite."""
+    names = en12299_columns(body_names)
+    row = dict.fromkeys(names, np.nan)
+    if not names:
+        return row
+    time, q, qdot, qddot, body = comfort_states(result, body_names)
+    finite = all(np.all(np.isfinite(x[:, body])) for x in (q, qdot, qddot))
+    if comfort.record_blocks(time)[1] < 1 or not finite:
+        return row
+    points = comfort.comfort_of_states(time, q, qdot, qddot, body)["points"]
+    for name, point in zip(names, points.values()):
+        row[name] = point["n_mv"]
+    return row
+
+
+def sample_row(result, friction, speed, body_names) -> dict:
+    """The table row (without the inputs) of one unbatched run at ``speed`` [m/s] with
+    ``friction``, whose vehicle's bodies are ``body_names`` (``vehicle.system.
+    body_names``): see the module docstring. NaN where a quantity has no value (e.g.
+    nothing reached, or a record too short for a standard's window)."""
     summary = summarize(result, friction=friction)
     valid = np.asarray(result.valid, dtype=bool)
     n_wheelsets = len(summary["wheelsets"])
@@ -119,4 +251,4 @@ def sample_row(result, friction, speed) -> dict:
         j = SIDES.index(side)
         row[f"wear_number_{k}_{side}_N"] = (float(np.mean(tgamma[:, k - 1, j]))
                                             if len(tgamma) else np.nan)
-    return row
+    return row | en14363_row(result, speed, body_names) | en12299_row(result, body_names)

@@ -1,6 +1,7 @@
 """EN 12299 mean comfort of a run: the carbody floor accelerometers' readings
 (:mod:`jaxrail.standards.floor`) at floor points over the bogies and at the centre,
-from a results file's ``bodies/q``, ``bodies/qdot`` and ``bodies/qddot``, through
+from a results file's ``bodies/q``, ``bodies/qdot`` and ``bodies/qddot`` or from the
+same arrays in memory (:func:`comfort_of_states`), through
 :func:`jaxrail.standards.en12299.mean_comfort`."""
 
 import dataclasses
@@ -9,6 +10,7 @@ import numpy as np
 
 from ..vehicles.trailer import trailer_values
 from .en12299 import MEAN_COMFORT_BLOCKS, WINDOW_S, continuous_comfort, mean_comfort
+from .en14363 import valid_rows
 from .floor import floor_accelerations
 
 FLOOR_HEIGHT_M = 1.2
@@ -27,12 +29,54 @@ def trailer_floor_points(values=None) -> dict:
             "over trailing bogie": (-a, 0.0, z)}
 
 
-def comfort_of_file(path, body="carbody", points=None) -> dict:
+def record_blocks(time) -> tuple[float, int]:
+    """(sample rate [Hz], whole 5 s blocks) of the output times ``time`` (T,) [s], the
+    blocks counted as :mod:`.en12299` counts them; (0, 0) for fewer than 2 times."""
+    time = np.asarray(time, dtype=np.float64)
+    rate = (len(time) - 1) / (time[-1] - time[0]) if len(time) > 1 else 0.0
+    window = round(WINDOW_S * rate)  # samples of one block
+    return rate, (len(time) // window if window >= 1 else 0)
+
+
+def body_index(names, body: str, where: str) -> int:
+    """Index of ``body`` in the bodies' ``names``; ValueError naming ``where`` (the
+    names' source) and the bodies there are."""
+    names = [str(n) for n in names]
+    if body not in names:
+        raise ValueError(f"{where}: no body named {body!r} (bodies: "
+                         f"{names or 'unnamed'})")
+    return names.index(body)
+
+
+def comfort_of_states(time, q, qdot, qddot, body: int, points=None,
+                      body_name: str = "carbody") -> dict:
     """Mean comfort N_MV and the largest continuous comfort Cc per axis at each floor
-    ``points`` (default :func:`trailer_floor_points`) of ``body`` in the results file
-    ``path``. Records shorter than the standard's 5 min give an indicative N_MV from
-    the 5 s blocks they hold (``"indicative": true``). ValueError names a missing
-    dataset or body, or a record shorter than one 5 s block."""
+    ``points`` (``{name: (3,) [m, body frame]}``, default
+    :func:`trailer_floor_points`) of body index ``body`` (named ``body_name`` in the
+    result), from the uniformly sampled ``time`` (T,) [s] and the bodies' ``q``,
+    ``qdot``, ``qddot`` (T, 7 n) or (T, n, 7) (jaxrail.multibody conventions, all
+    finite). Fewer blocks than the standard's 60 give an indicative N_MV
+    (``"indicative": true``); ValueError for a record shorter than one 5 s block."""
+    rate, blocks = record_blocks(time)
+    out = {"body": body_name, "sample_rate_hz": rate, "blocks_of_5_s": blocks,
+           "indicative": blocks < MEAN_COMFORT_BLOCKS, "points": {}}
+    for name, point in (trailer_floor_points() if points is None else points).items():
+        reading = floor_accelerations(q, qdot, qddot, body, point)
+        comfort = mean_comfort(*reading.T, rate, min_blocks=max(1, min(
+            blocks, MEAN_COMFORT_BLOCKS)))
+        cc = continuous_comfort(*reading.T, rate)
+        out["points"][name] = {
+            "point_m": [float(x) for x in point], **dataclasses.asdict(comfort),
+            **{f"max_{k}_m_s2": float(np.nanmax(cc[k])) for k in ("cc_x", "cc_y", "cc_z")}}
+    return out
+
+
+def comfort_of_file(path, body="carbody", points=None) -> dict:
+    """:func:`comfort_of_states` of ``body`` in the results file ``path``, over the rows
+    before the first ``valid = 0``. ValueError names a missing dataset or body, or a
+    record shorter than one 5 s block.
+    :func:`jaxrail.standards.from_result.comfort_of_result` does the same for a
+    :class:`jaxrail.simulation.SimulationResult` in memory."""
     import h5py
 
     with h5py.File(path, "r") as f:
@@ -44,26 +88,11 @@ def comfort_of_file(path, body="carbody", points=None) -> dict:
                              "added to the outputs have them)")
         names = [n.decode() if isinstance(n, bytes) else str(n)
                  for n in f["bodies/q"].attrs.get("body_names", [])]
-        if body not in names:
-            raise ValueError(f"{path}: no body named {body!r} in bodies/q (bodies: "
-                             f"{names or 'unnamed'})")
-        valid = f["valid"][()].astype(bool)
-        rows = len(valid) if np.all(valid) else int(np.argmin(valid))
+        index = body_index(names, body, f"{path}: bodies/q")
+        rows = valid_rows(f["valid"][()])
         time = f["time"][:rows]
         states = [f[n][:rows] for n in ("bodies/q", "bodies/qdot", "bodies/qddot")]
-    rate = (len(time) - 1) / (time[-1] - time[0]) if len(time) > 1 else 0.0
-    blocks = len(time) // round(WINDOW_S * rate) if rate > 0 else 0  # as en12299 counts
-    out = {"body": body, "sample_rate_hz": rate, "blocks_of_5_s": blocks,
-           "indicative": blocks < MEAN_COMFORT_BLOCKS, "points": {}}
-    for name, point in (trailer_floor_points() if points is None else points).items():
-        reading = floor_accelerations(*states, names.index(body), point)
-        comfort = mean_comfort(*reading.T, rate, min_blocks=max(1, min(
-            blocks, MEAN_COMFORT_BLOCKS)))
-        cc = continuous_comfort(*reading.T, rate)
-        out["points"][name] = {
-            "point_m": [float(x) for x in point], **dataclasses.asdict(comfort),
-            **{f"max_{k}_m_s2": float(np.nanmax(cc[k])) for k in ("cc_x", "cc_y", "cc_z")}}
-    return out
+    return comfort_of_states(time, *states, index, points, body)
 
 
 def format_comfort(comfort: dict) -> str:

@@ -448,24 +448,80 @@ REQUIRED_DATASETS = ("time", "valid", "contact/lateral_force", "contact/vertical
                      "bodies/q")
 
 
-def _wheelset_body(f, wheelset_body):
-    """(index of the leading wheelset's body in bodies/q, how it was found)."""
+def leading_wheelset_body(names):
+    """Index in ``names`` (the bodies' names, in order) of the leading wheelset's body:
+    the one named ``wheelset`` or ``wheelset_<k>`` with the smallest k; None if none."""
+    candidates = []
+    for i, name in enumerate(names):
+        head, _, tail = str(name).lower().partition("_")
+        if head == "wheelset" and (tail == "" or tail.isdigit()):
+            candidates.append((int(tail) if tail else 0, i))
+    return min(candidates)[1] if candidates else None
+
+
+def find_wheelset_body(names, wheelset_body, where):
+    """(index of the leading wheelset's body, how it was found) from the bodies'
+    ``names`` (None if unnamed), unless ``wheelset_body`` gives it; ``where`` names
+    the names' source in the error."""
     if wheelset_body is not None:
         return int(wheelset_body), "argument wheelset_body"
-    names = f["bodies/q"].attrs.get("body_names")
-    if names is not None:
-        names = [n.decode() if isinstance(n, bytes) else str(n) for n in names]
-        candidates = []
-        for i, name in enumerate(names):
-            head, _, tail = name.lower().partition("_")
-            if head == "wheelset" and (tail == "" or tail.isdigit()):
-                candidates.append((int(tail) if tail else 0, i))
-        if candidates:
-            i = min(candidates)[1]
-            return i, f"bodies/q body_names: {names[i]!r}"
-    raise ValueError("wheelset_body: the file names no wheelset body (bodies/q has no "
-                     "body_names attribute with a 'wheelset' or 'wheelset_<k>' entry); "
-                     "pass the leading wheelset's body index")
+    i = None if names is None else leading_wheelset_body(names)
+    if i is None:
+        raise ValueError(f"wheelset_body: no body named 'wheelset' or 'wheelset_<k>' "
+                         f"in {where} ({'none given' if names is None else list(names)}); "
+                         "pass the leading wheelset's body index")
+    return i, f"{where}: {names[i]!r}"
+
+
+def valid_rows(valid) -> int:
+    """How many rows come before the first False of ``valid`` (T,) (all when none is):
+    an early stop ends the record."""
+    valid = np.asarray(valid, dtype=bool)
+    return len(valid) if np.all(valid) else int(np.argmin(valid))
+
+
+def travelled_distance(centre):
+    """Distance travelled [m] (T,) from 0: the cumulative horizontal path of a point
+    whose global (x, y) [m] at each sample is ``centre`` (T, 2)."""
+    steps = np.hypot(*np.diff(np.asarray(centre, dtype=np.float64), axis=0).T)
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def record_channels(time, valid, lateral_force, vertical_force, centre):
+    """``{"time", "distance", "y", "q", "rows", "total_rows"}``: the channels of
+    :func:`assess_channels` from a run's outputs, over the rows before the first
+    ``valid`` False. ``lateral_force``, ``vertical_force`` (T, W, 2) [N] are the
+    contact outputs (on the wheel from the rail, track frame: docs/results.md), so Y
+    = -lateral_force and Q = vertical_force; ``centre`` (T, 2) [m] is the leading
+    wheelset centre's global (x, y), whose path is the distance travelled. A
+    ValueError when fewer than 2 rows are valid."""
+    rows = valid_rows(valid)
+    if rows < 2:
+        raise ValueError(f"fewer than 2 valid rows ({rows})")
+    return {"time": np.asarray(time, dtype=np.float64)[:rows],
+            "distance": travelled_distance(np.asarray(centre)[:rows]),
+            "y": -np.asarray(lateral_force, dtype=np.float64)[:rows],
+            "q": np.asarray(vertical_force, dtype=np.float64)[:rows],
+            "rows": rows, "total_rows": len(np.asarray(valid))}
+
+
+def assess_record(channels, status, **options) -> dict:
+    """:func:`assess_channels` of ``channels`` (:func:`record_channels`) with
+    ``options``, whose acceleration channels have the run's ``total_rows`` rows (cut to
+    the valid ones here); a note names an early stop (``status``)."""
+    rows, total = channels["rows"], channels["total_rows"]
+    for name in ("bogie_frame_acceleration", "carbody_acceleration"):
+        if options.get(name) is not None:
+            a = np.asarray(options[name], dtype=np.float64)
+            if a.shape[0] != total:
+                raise ValueError(f"{name}: expected {total} rows like the run, got "
+                                 f"shape {a.shape}")
+            options[name] = a[:rows]
+    out = assess_channels(channels["time"], channels["distance"], channels["y"],
+                          channels["q"], **options)
+    if rows < total:
+        out["notes"].append(f"the run stopped early ({status}): {rows} of {total} rows")
+    return out
 
 
 def assess_file(path, *, wheelset_body=None, **options) -> dict:
@@ -480,6 +536,8 @@ def assess_file(path, *, wheelset_body=None, **options) -> dict:
     ``body_names`` attribute. ``options`` are those of :func:`assess_channels`;
     acceleration channels given there have the file's T rows. The result adds
     ``"file": {"path", "status", "rows_used", "wheelset_body"}``.
+    :func:`jaxrail.standards.from_result.assess_result` does the same for a
+    :class:`jaxrail.simulation.SimulationResult` in memory.
     """
     import h5py
 
@@ -488,33 +546,24 @@ def assess_file(path, *, wheelset_body=None, **options) -> dict:
         if missing:
             raise ValueError(f"{path}: missing dataset(s) {', '.join(missing)} (a jaxrail "
                              "results file, docs/results.md, has them)")
-        body, found = _wheelset_body(f, wheelset_body)
+        names = f["bodies/q"].attrs.get("body_names")
+        if names is not None:
+            names = [n.decode() if isinstance(n, bytes) else str(n) for n in names]
+        body, found = find_wheelset_body(names, wheelset_body, "bodies/q body_names")
         q_bodies = f["bodies/q"]
         if q_bodies.ndim != 3 or not 0 <= body < q_bodies.shape[1]:
             raise ValueError(f"wheelset_body: {body} is not a body of bodies/q, shape "
                              f"{q_bodies.shape}")
-        valid = f["valid"][()].astype(bool)
-        rows = int(np.argmin(valid)) if not np.all(valid) else len(valid)
-        if rows < 2:
-            raise ValueError(f"{path}: fewer than 2 valid rows ({rows})")
-        time = f["time"][:rows]
-        lateral = f["contact/lateral_force"][:rows]
-        vertical = f["contact/vertical_force"][:rows]
-        centre = q_bodies[:rows, body, :2]
+        try:
+            channels = record_channels(f["time"][()], f["valid"][()],
+                                       f["contact/lateral_force"][()],
+                                       f["contact/vertical_force"][()],
+                                       q_bodies[:, body, :2])
+        except ValueError as error:
+            raise ValueError(f"{path}: {error}") from None
         status = f.attrs.get("status", "")
         status = status.decode() if isinstance(status, bytes) else str(status)
-    n_file = len(valid)
-    for name in ("bogie_frame_acceleration", "carbody_acceleration"):
-        if options.get(name) is not None:
-            a = np.asarray(options[name], dtype=np.float64)
-            if a.shape[0] != n_file:
-                raise ValueError(f"{name}: expected {n_file} rows like the file, got "
-                                 f"shape {a.shape}")
-            options[name] = a[:rows]
-    distance = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(centre, axis=0).T))])
-    out = assess_channels(time, distance, -np.asarray(lateral), vertical, **options)
-    out["file"] = {"path": str(path), "status": status, "rows_used": rows,
+    out = assess_record(channels, status, **options)
+    out["file"] = {"path": str(path), "status": status, "rows_used": channels["rows"],
                    "wheelset_body": body, "wheelset_body_from": found}
-    if rows < n_file:
-        out["notes"].append(f"the run stopped early ({status}): {rows} of {n_file} rows")
     return out
