@@ -277,12 +277,15 @@ def _starts_derailed(limits, lateral0, irregularity0, misalignment):
             | (unknown & (jnp.abs(misalignment) > limits.lateral)))
 
 
-def _outputs(vehicle, params, track, q, qdot, rails, model):
+def _outputs(vehicle, params, track, q, qdot, rails, model, t=0.0, drive=None):
     """``(WheelOutputs, qddot)`` at one state: the wheel outputs (leading shape (W, 2,
     P)) and the accelerations (7 n,) of eq. (19) with the same loads, from one contact
-    evaluation; ``rails``: the flexible track's ``(w, wdot)`` (W, 2, 2), or None."""
+    evaluation; ``rails``: the flexible track's ``(w, wdot)`` (W, 2, 2), or None;
+    ``drive``: the run's speed drive (its force at time ``t`` [s]), or None."""
     forces_on_bodies, torques, patches, forces = contact_loads(vehicle, params, track, q,
                                                                qdot, model, rails)
+    if drive is not None:
+        forces_on_bodies = drive.add_to(t, qdot, forces_on_bodies)
     qddot = accelerations(vehicle.system, params.system, 0.0, q, qdot,
                           FixedLoads(forces_on_bodies, torques))[0]
     position, _, _, _ = wheelset_states(vehicle, q, qdot)
@@ -329,10 +332,11 @@ def _evaluations(solver, steps):
 
 
 def _results(vehicle, params, track, model, q0, qdot0, rails0, ts, q, qdot, rails, result,
-             derailed, steps, accepted_steps, rejected_steps, evaluations):
+             derailed, steps, accepted_steps, rejected_steps, evaluations, drive=None):
     """SimulationResult from the states at the output times (non-finite rows: not
     reached), without host timings. ``rails0``, ``rails``: a flexible track's rails
-    ``(w, wdot)`` at the start (W, 2, 2) and at the output times (T, W, 2, 2), or None."""
+    ``(w, wdot)`` at the start (W, 2, 2) and at the output times (T, W, 2, 2), or None;
+    ``drive``: the run's speed drive, or None."""
     _, rest_vertical, _, _, _ = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
     valid = jnp.all(jnp.isfinite(q), axis=1) & jnp.all(jnp.isfinite(qdot), axis=1)
     # Outputs after an early stop are recomputed at the initial state and masked.
@@ -341,8 +345,9 @@ def _results(vehicle, params, track, model, q0, qdot0, rails0, ts, q, qdot, rail
     rails_safe = None if rails is None else jax.tree.map(safe, rails, rails0)
     lateral, vertical, yaw, _, irregularity = jax.vmap(
         lambda a, b: _wheelset_track_coordinates(vehicle, track, a, b))(q_safe, qdot_safe)
-    wheels, qddot = jax.lax.map(lambda y: _outputs(vehicle, params, track, *y, model),
-                                (q_safe, qdot_safe, rails_safe))
+    wheels, qddot = jax.lax.map(
+        lambda y: _outputs(vehicle, params, track, *y[1:], model, y[0], drive),
+        (ts, q_safe, qdot_safe, rails_safe))
     deflection = (jnp.zeros(lateral.shape + (2, 2), dtype=q.dtype) if rails is None
                   else rails_safe[0])
     n_norm = vehicle.system.n_bodies
@@ -429,7 +434,7 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
                     *_saved_states(sol, (q0, qdot0, rails0)), sol.result, derailed,
                     sol.stats["num_steps"], sol.stats["num_accepted_steps"],
                     sol.stats["num_rejected_steps"],
-                    _evaluations(solver, sol.stats["num_steps"]))
+                    _evaluations(solver, sol.stats["num_steps"]), drive)
 
 
 PROGRAMS_KEPT = 32

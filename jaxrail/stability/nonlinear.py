@@ -10,7 +10,8 @@ peak-to-peak of y over the ``window`` [s] centred on t (:func:`envelope`).
   cycle (the attractor, reported with its amplitude and frequency); then the speed
   falls at ``rate`` [m/s^2] (GENSYS's example: 5 km/h per second). The critical speed
   is the programmed speed when the amplitude last fell below ``threshold`` [m]: the
-  oscillation has died.
+  oscillation has died. The centred window sees a peak up to half a window after it,
+  so this reads up to ``rate * window / 2`` low (0.35 m/s at 5 km/h per second).
 - **Brute force** (:func:`brute_force`): constant-speed runs of ``duration`` [s],
   several speeds at once (one ``vmap``ped program), classified as hunting when the
   amplitude over the last ``window`` is at least ``threshold`` (or the wheelset
@@ -100,14 +101,15 @@ def oscillation_frequency(t, y) -> float:
 
 def attractor(t, y, window=WINDOW, threshold=THRESHOLD) -> dict:
     """The motion over the last ``window`` [s] of ``y`` [m]: amplitude [m], frequency [Hz]
-    and whether it is a hunting limit cycle (amplitude at least ``threshold``) or rest."""
+    (None at rest) and whether it is a hunting limit cycle (amplitude at least
+    ``threshold``) or rest."""
     t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
     last = t >= t[-1] - window
     amplitude = 0.5 * float(np.nanmax(y[last]) - np.nanmin(y[last]))
     hunting = bool(amplitude >= threshold)
     return {"kind": "hunting limit cycle" if hunting else "rest (centred running)",
             "amplitude_m": amplitude, "mean_m": float(np.nanmean(y[last])),
-            "frequency_hz": oscillation_frequency(t[last], y[last]) if hunting else math.nan}
+            "frequency_hz": oscillation_frequency(t[last], y[last]) if hunting else None}
 
 
 def check_straight_x(track) -> None:
@@ -251,12 +253,12 @@ STARTS = ("limit cycle", "shift")
 def brute_force(vehicle, params, track, low, high, resolution=0.5, duration=5.0,
                 disturbance=DISTURBANCE, start="limit cycle", hold=2.0, runs_per_batch=4,
                 wheelset=0, threshold=THRESHOLD, window=WINDOW, options=None,
-                contact_model=None, progress=None) -> dict:
+                contact_model=None, progress=None, max_batches=12) -> dict:
     """The brute-force method (module docstring) over ``[low, high]`` [m/s]: batches
     of ``runs_per_batch`` constant-speed runs of ``duration`` [s] until the bracket
     between a dying speed and the slowest hunting one above it is narrower than
-    ``resolution`` [m/s]; ``start`` one of :data:`STARTS`. ``progress``: a callable
-    given a line per batch, or None. Returns a JSON-ready dict: ``critical_speed_m_s``
+    ``resolution`` [m/s], at most ``max_batches``; ``start`` one of :data:`STARTS`.
+    ``progress``: a callable given a line per batch, or None. Returns a JSON-ready dict: ``critical_speed_m_s``
     (the bracket's middle; None if ``low`` already hunts or ``high`` does not:
     ``status`` says which), the bracket, the excitation, every run with its
     attractor."""
@@ -269,6 +271,7 @@ def brute_force(vehicle, params, track, low, high, resolution=0.5, duration=5.0,
     if start not in STARTS:
         raise ValueError(f"brute force: start must be one of {STARTS}, got {start!r}")
     body = driven_body(vehicle)
+    check_drive(SpeedDrive(body, high, vehicle_mass(params)), vehicle.system.n_bodies)
     started = time.perf_counter()
     shift = f"the rest pose shifted {1e3 * disturbance:g} mm to the left"
     if start == "shift":
@@ -326,7 +329,7 @@ def brute_force(vehicle, params, track, low, high, resolution=0.5, duration=5.0,
         while k > 0 and batch[k - 1]["hunting"]:
             k -= 1
         mixed |= any(r["hunting"] for r in batch[:k])
-        if k == 0:
+        if k == 0 and speeds[0] <= low:
             status, bracket = "hunting already at the lowest speed: start lower", None
             break
         if k == len(batch) and first and initial is None:
@@ -339,10 +342,15 @@ def brute_force(vehicle, params, track, low, high, resolution=0.5, duration=5.0,
             if initial is not None and np.all(np.isfinite(q_end[k])):
                 # the next batch starts on the limit cycle of the slowest hunting run
                 initial = (jnp.asarray(q_end[k]), jnp.asarray(qdot_end[k]), jnp.float64(hi))
-        lo = float(speeds[k - 1])
+        # the bracket's lower end hunts from a start closer to it than the one it died
+        # from: the dying speed below it is not known any more, back to ``low``
+        lo = float(speeds[k - 1]) if k > 0 else float(low)
         bracket = (lo, hi)
         if hi - lo <= resolution:
             status = "found"
+            break
+        if len(runs) >= max_batches * runs_per_batch:
+            status = f"not converged in {max_batches} batches: bracket {lo:.2f}-{hi:.2f} m/s"
             break
     critical = None if bracket is None else 0.5 * (bracket[0] + bracket[1])
     return {

@@ -13,7 +13,8 @@ from ..vehicles import get_values
 from ..simulation import SolverOptions
 from ..track import straight_track
 from .critical import LinearStability
-from .nonlinear import GENSYS_RATE, brute_force, check_straight_x, ramp_down
+from .linear import check_track
+from .nonlinear import GENSYS_RATE, brute_force, ramp_down
 
 CONICITY_AMPLITUDE_M = 3e-3  # [m] amplitude of the reported equivalent conicity
 _SHIFTS = np.round(np.arange(-10.0, 10.0 + 1e-9, 0.1), 9) * 1e-3  # [m] for the conicity
@@ -96,7 +97,7 @@ def nonlinear_study(vehicle, params, track, low, high, rate=GENSYS_RATE, resolut
     straight of ``track``'s rail centre distance long enough for the ramp.
     ``nonlinear_critical_speed_m_s`` is the brute force's (constant speeds, the
     definition); the ramp-down's is beside it with their relative difference."""
-    check_straight_x(track)
+    check_track(track)
     options = SolverOptions(integrator="imex") if options is None else options
     length = 100.0 + high * (hold + (high - low) / rate)
     long = straight_track(length, rail_centre_distance=track.rail_centre_distance)
@@ -104,8 +105,17 @@ def nonlinear_study(vehicle, params, track, low, high, rate=GENSYS_RATE, resolut
                      contact_model=model)
     if progress is not None:
         progress(f"ramp-down: {ramp['status']}")
-    brute = brute_force(vehicle, params, long, low, high, resolution=resolution, hold=hold,
-                        options=options, contact_model=model, progress=progress)
+    if ramp["attractor_at_start_speed"]["kind"] != "hunting limit cycle":
+        brute = {"status": f"not run: {ramp['status']}", "critical_speed_m_s": None,
+                 "bracket_m_s": None, "resolution_m_s": resolution, "runs": []}
+    else:
+        try:
+            brute = brute_force(vehicle, params, long, low, high, resolution=resolution,
+                                hold=hold, options=options, contact_model=model,
+                                progress=progress)
+        except ValueError as error:  # e.g. its own run at ``high`` found no cycle
+            brute = {"status": f"not run: {error}", "critical_speed_m_s": None,
+                     "bracket_m_s": None, "resolution_m_s": resolution, "runs": []}
     speeds = ramp["critical_speed_m_s"], brute["critical_speed_m_s"]
     return {
         "nonlinear_critical_speed_m_s": speeds[1],

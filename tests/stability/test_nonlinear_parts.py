@@ -114,3 +114,57 @@ def test_a_state_moved_to_another_speed_keeps_its_creepages():
         axle = np.asarray(qt.rotation_matrix(p[k]))[:, 1]
         change = -7.5 / r0 * axle if k in vehicle.wheelsets else np.zeros(3)
         np.testing.assert_allclose(spin - omega[k], change, atol=1e-10)
+
+
+def _thin_basin(monkeypatch, fold, reach, period=0.1):
+    """Brute force's runs replaced by a model of a thin basin: from a start on the cycle
+    at speed S a run at v hunts when v >= fold + reach (S - v) (the closer the start,
+    the nearer the true ``fold``); returns the speeds and starts it was asked for."""
+    from jaxrail.stability import nonlinear
+
+    asked = []
+    n_state = 21  # the suspended wheelset: 3 bodies
+
+    def cycle(vehicle, params, track, speed, *args):
+        return (jnp.zeros(n_state), jnp.zeros(n_state),
+                {"kind": "hunting limit cycle", "amplitude_m": 6e-3, "frequency_hz": 10.0})
+
+    def run(vehicle, params, track, speeds, duration, disturbance, mass, start, **static):
+        speeds, s = np.asarray(speeds), float(start[2])
+        asked.append((s, speeds.tolist()))
+        t = np.linspace(0.0, float(duration), static["options"].n_outputs)
+        hunts = speeds >= fold + reach * (s - speeds)
+        y = np.where(hunts[:, None], 6e-3, 1e-9) * np.sin(2 * np.pi * t / period)[None, :]
+        b = len(speeds)
+        return (y[:, :, None], speeds[:, None] + 0.0 * t[None, :], np.zeros(b, bool),
+                np.ones(b, bool), np.ones((b, n_state)), np.ones((b, n_state)))
+
+    monkeypatch.setattr(nonlinear, "limit_cycle", cycle)
+    monkeypatch.setattr(nonlinear, "_compile", lambda f, *a, **k: (run, 0.0))
+    return asked
+
+
+@pytest.mark.parametrize("reach", [0.0, 0.3, 1.0])
+def test_brute_force_brackets_the_fold_from_ever_closer_starts(monkeypatch, reach):
+    """Without the basin's effect (reach 0) the bracket holds the fold at once; with it
+    the starts move down the cycle until the bracket holds it, the lower end that died
+    from a far start tested again from a closer one (reach 1 hunts it then)."""
+    asked = _thin_basin(monkeypatch, fold=73.7, reach=reach)
+    vehicle, params = suspended_wheelset()
+    study = brute_force(vehicle, params, straight_track(100.0), 65.0, 95.0, resolution=0.5,
+                        duration=2.0)
+    assert study["status"] == "found"
+    low, high = study["bracket_m_s"]
+    assert high - low <= 0.5
+    # the bracket's bottom died and its top hunted from the start each was last run from
+    last_start = {v: s for s, speeds in asked for v in speeds}
+    assert low < 73.7 + reach * (last_start[low] - low)
+    assert high >= 73.7 + reach * (last_start[high] - high)
+    # below the fold every run dies, whatever its start: never more than the resolution low
+    assert study["critical_speed_m_s"] > 73.7 - 0.25
+    if reach == 0.0:
+        assert low <= 73.7 <= high
+    starts = [s for s, _ in asked]
+    assert starts[0] == 95.0 and starts == sorted(starts, reverse=True)
+    rows = [r for r in study["runs"] if r["hunting"]]
+    assert all(r["attractor"]["kind"] == "hunting limit cycle" for r in rows)
