@@ -34,6 +34,7 @@ to 76.6 m/s, where the ramp-down followed the cycle down to 72.5 m/s).
 A run's speed and the wheelset's motion are saved at ``OUTPUT_RATE`` per second.
 """
 
+import dataclasses
 import math
 import time
 import warnings
@@ -57,8 +58,8 @@ OUTPUT_RATE = 400.0  # [1/s] outputs: 50 per period of 8 Hz hunting
 
 
 def driven_body(vehicle) -> int:
-    """The body the speed drive acts on: the heaviest-named one of ``carbody`` or
-    ``frame`` that the vehicle has (ValueError if neither)."""
+    """The body the speed drive acts on: the ``carbody``, else the ``frame``
+    (ValueError if the vehicle has neither)."""
     for name in ("carbody", "frame"):
         if name in vehicle.system.body_names:
             return vehicle.system.body_names.index(name)
@@ -126,7 +127,7 @@ def _options(options, duration):
     if options is None:
         options = SolverOptions(integrator="imex")
     n = int(math.ceil(duration * OUTPUT_RATE)) + 1
-    return SolverOptions(**{**options.__dict__, "n_outputs": n, "progress": False})
+    return dataclasses.replace(options, n_outputs=n, progress=False)
 
 
 def _check_speeds(low, high, what):

@@ -105,17 +105,17 @@ def nonlinear_study(vehicle, params, track, low, high, rate=GENSYS_RATE, resolut
                      contact_model=model)
     if progress is not None:
         progress(f"ramp-down: {ramp['status']}")
+    not_run = lambda why: {"status": f"not run: {why}", "critical_speed_m_s": None,  # noqa: E731
+                           "bracket_m_s": None, "resolution_m_s": resolution, "runs": []}
     if ramp["attractor_at_start_speed"]["kind"] != "hunting limit cycle":
-        brute = {"status": f"not run: {ramp['status']}", "critical_speed_m_s": None,
-                 "bracket_m_s": None, "resolution_m_s": resolution, "runs": []}
+        brute = not_run(ramp["status"])
     else:
         try:
             brute = brute_force(vehicle, params, long, low, high, resolution=resolution,
                                 hold=hold, options=options, contact_model=model,
                                 progress=progress)
         except ValueError as error:  # e.g. its own run at ``high`` found no cycle
-            brute = {"status": f"not run: {error}", "critical_speed_m_s": None,
-                     "bracket_m_s": None, "resolution_m_s": resolution, "runs": []}
+            brute = not_run(error)
     speeds = ramp["critical_speed_m_s"], brute["critical_speed_m_s"]
     return {
         "nonlinear_critical_speed_m_s": speeds[1],

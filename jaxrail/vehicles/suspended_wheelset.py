@@ -12,7 +12,8 @@ goes straight on, Wickens' model. The frame's mass is the sprung mass per axle o
 trailer (``carbody / 4 + bogie / 2``); the primary springs have no vertical stiffness
 and press the wheelset down with the frame's weight as a constant preload (Wickens'
 constant axle load), so the wheel loads are the trailer's at any frame height. Nothing
-drives or brakes the frame.
+drives or brakes the frame unless a speed drive holds it
+(:class:`~jaxrail.vehicles.drive.SpeedDrive`, as the nonlinear stability methods do).
 
 Body order: frame, axlebox_1, wheelset_1 (the axlebox body joined to the wheelset by a
 revolute joint about the axle, as in the trailer). Straight track along global x only:
