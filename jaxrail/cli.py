@@ -378,8 +378,9 @@ def _tables_command(args):
 def _stability_command(args):
     from .scenarios import load_scenario
     from .simulation import SolverOptions
-    from .stability.report import (format_nonlinear, format_study, nonlinear_study,
-                                   speed_range, stability_study)
+    from .stability.report import (curve_option, curve_track, format_nonlinear,
+                                   format_study, nonlinear_study, speed_range,
+                                   stability_study)
     from .vehicles import contact_model
 
     scenario = load_scenario(args.scenario)
@@ -391,7 +392,12 @@ def _stability_command(args):
     if not (args.ramp_rate > 0.0 and args.resolution > 0.0):
         raise ValueError(f"--ramp-rate {args.ramp_rate:g} and --resolution "
                          f"{args.resolution:g} must be > 0")
-    vehicle, params, track = scenario.build()
+    curve = None if args.curve is None else curve_option(args.curve)
+    if curve is not None and nonlinear is not None:
+        raise ValueError("--nonlinear runs on straight track only: leave out --curve")
+    vehicle, params, track = scenario.build(None if curve is None else curve[0])
+    if curve is not None:
+        track = curve_track(*curve, rail_centre_distance=track.rail_centre_distance)
     model = (contact_model(args.contact, vehicle, params, progress=not args.quiet)
              if args.contact == "table" else None)
     print(f"jaxrail stability {scenario.name}: {low:g}-{high:g} m/s, compiling ...",
@@ -637,7 +643,7 @@ def build_parser():
     stability = commands.add_parser(
         "stability", help="stability: the hunting mode against speed, the linear critical "
                           "speed and, with --nonlinear, the nonlinear one (straight, ideal, "
-                          "rigid track)")
+                          "rigid track; with --curve the linear one in a curve)")
     _scenario_argument(stability, "a built-in scenario (e.g. suspended-wheelset) or a scenario "
                                   ".toml file (its vehicle, profiles and friction)")
     stability.add_argument("--speeds", help="speed range LO:HI [m/s] holding the crossing "
@@ -650,6 +656,9 @@ def build_parser():
                                           "it (NAME-nonlinear.png)")
     stability.add_argument("--contact", choices=CONTACT_MODES, default="online",
                            help="contact model (default: the paper's search)")
+    stability.add_argument("--curve", metavar="RADIUS[:CANT]",
+                           help="the linear analysis in a left curve of this radius [m] and "
+                                "cant [m] (default 0), about the steady curving state")
     stability.add_argument("--nonlinear", metavar="LO:HI",
                            help="also the nonlinear critical speed in LO:HI [m/s]: ramp-down "
                                 "from HI, then brute force (minutes of simulation)")

@@ -133,21 +133,23 @@ class Scenario:
             raise ValueError(f"{self.source}: [vehicle] {key}: {name!r} is a {kind} profile")
         return profile
 
-    def build(self):
-        """``(vehicle, params, track)``."""
+    def build(self, curve_radius=None):
+        """``(vehicle, params, track)``. ``curve_radius`` [m]: build the suspended wheelset
+        for a left curve of that radius (its frame turning about the curve's centre) and
+        leave the scenario's track to the caller (the stability analysis in a curve)."""
         wheel, rail = self._profile("wheel"), self._profile("rail")
         if self.model in ("trailer", "bogie"):
             values = trailer_values(self.vehicle_data)
             vehicle, params = (trailer if self.model == "trailer" else bogie)(wheel, rail, values)
         elif self.model == "suspended-wheelset":
             curved = [k + 1 for k, seg in enumerate(self.segments) if seg["kind"] != "straight"]
-            if curved:
+            if curved and curve_radius is None:
                 raise ValueError(f"{self.source}: [vehicle] model = 'suspended-wheelset' runs "
                                  f"on straight track only (its frame slides along the "
                                  f"global x axis); track segments {curved} are not straight")
             # a data file gives its own values, the primary longitudinal stiffness included
             values = None if self.vehicle_data is None else trailer_values(self.vehicle_data)
-            vehicle, params = suspended_wheelset(wheel, rail, values)
+            vehicle, params = suspended_wheelset(wheel, rail, values, curve_radius=curve_radius)
         else:
             vehicle, params = single_wheelset(wheel, rail)
         params = eqx.tree_at(lambda p: p.contact.friction, params, self.friction)

@@ -24,6 +24,7 @@ from jax.flatten_util import ravel_pytree
 
 from ..vehicles.loads import resolve_contact_model
 from ..vehicles.parameters import get_values, parameter, set_values
+from .curving import SteadyCurving
 from .linear import check_track, comoving_rhs, linear_system, modes, steady_motion
 
 SPEED_TOLERANCE = 1e-7  # the root solve stops when a step moves the speed less (relative)
@@ -43,8 +44,9 @@ class SpeedPoint:
 
 
 class LinearStability:
-    """The linear stability of one vehicle on one straight track, compiled once: the
-    speed and every named parameter are traced.
+    """The linear stability of one vehicle on one straight track or one circular arc
+    (about the steady curving state, :mod:`jaxrail.stability.curving`), compiled once:
+    the speed and every named parameter are traced.
 
     ``LinearStability(vehicle, params, track, model=None)``; ``model``: the contact
     model (default the paper's search, or a :class:`~jaxrail.vehicles.TableContact`).
@@ -55,9 +57,15 @@ class LinearStability:
         self.vehicle, self.params, self.track = vehicle, params, track
         self.model = resolve_contact_model(model)
         model = self.model
-        # two programs: the steady motion (the rest pose's solve) and the matrices about it
-        self._steady = eqx.filter_jit(
-            lambda params, speed: steady_motion(vehicle, params, track, speed, model))
+        # two programs: the steady motion (the rest pose's solve, or the steady curving
+        # state's Newton iteration) and the matrices about it
+        self.curving = None
+        if list(track.kinds) == ["arc"]:
+            self.curving = SteadyCurving(vehicle, params, track, model)
+            self._steady = lambda params, speed: self.curving(speed, params).steady
+        else:
+            self._steady = eqx.filter_jit(
+                lambda params, speed: steady_motion(vehicle, params, track, speed, model))
         self._system = eqx.filter_jit(
             lambda params, steady: linear_system(vehicle, params, track, steady, model))
         self._derivatives = {}
@@ -134,6 +142,10 @@ class LinearStability:
         names = tuple(names)
         for name in names:
             parameter(name)
+        if self.curving is not None:
+            raise ValueError("the critical speed's gradient is implemented on straight "
+                             "track only (in a curve the steady curving state would need "
+                             "differentiating too)")
         params = self.params if params is None else params
         values = get_values(self.vehicle, params, names)
         x = jnp.concatenate([jnp.asarray([point.speed], jnp.float64), values])

@@ -1,4 +1,4 @@
-"""Linear stability of a vehicle's steady motion on straight track.
+"""Linear stability of a vehicle's steady motion on straight track and in a circular curve.
 
 The steady motion: every body moves along the track at ``speed``, the wheelsets centred
 on the rails at their rest pose (:func:`jaxrail.vehicles.initial_state`) and rolling at
@@ -19,6 +19,16 @@ order; omega0 the steady angular velocity, the spin) and ``(dv', domega')`` the
 accelerations of eq. (19) with the full contact model, both contact modes. The matrix
 ``A = dz'/dz`` at z = 0 is taken by forward-mode differentiation of all of it.
 
+In a circular curve (a track of one :class:`~jaxrail.track.Arc`) the steady motion is
+the steady curving state (:mod:`jaxrail.stability.curving`): every body at rest in a
+frame turning at ``Omega = V / R`` about the vertical through the curve's centre ``c``,
+the wheelsets spinning. The same coordinates are then taken in that frame (its axes are
+the global ones at t = 0): the velocity is ``v = v0 + Omega x dr + dv`` and the rates
+gain the frame's terms, ``dv' = a - 2 Omega x dv - Omega x (Omega x (r - c))`` and
+``domega' = alpha - Omega x omega``, with ``omega0 - Omega`` in place of ``omega0`` in
+``theta'``. On straight track ``Omega = 0`` and these are the equations above. The
+constant tangential force that holds the speed in the curve drops out of A.
+
 The joints tie these coordinates: A leaves the tangent space of the constraint manifold
 (the positions' and velocities' linearised constraints) invariant, and the modes of the
 vehicle are A's eigenvalues on that space (an orthonormal basis from the constraints'
@@ -30,6 +40,7 @@ theta, the wheelsets' spin left out) lies mostly in the wheelsets' lateral and y
 """
 
 import dataclasses
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -47,19 +58,47 @@ MIN_FREQUENCY_HZ = 0.05  # [Hz] below this a mode is not oscillatory (drift, rol
 NULL_TOLERANCE = 1e-9  # relative singular value below which a constraint row is void
 
 
-def check_track(track) -> None:
-    """ValueError unless ``track`` is an ideal, rigid, straight track (the steady motion
-    is a relative equilibrium there only; the nonlinear methods' drive pushes along the
-    straight's direction)."""
+def check_ideal(track) -> None:
+    """ValueError unless ``track`` is ideal and rigid (the steady motion is a relative
+    equilibrium there only)."""
     if getattr(track, "irregularity", None) is not None:
         raise ValueError("the stability analysis needs the ideal track: this track has "
                          "irregularities (track.with_irregularity(None))")
     if getattr(track, "support", None) is not None:
         raise ValueError("the stability analysis is for rigid rails: this track is flexible "
                          "(track.with_support(None))")
+
+
+def check_track(track) -> None:
+    """ValueError unless ``track`` is ideal, rigid, and one straight or one circular arc
+    (where the steady motion is a relative equilibrium)."""
+    check_ideal(track)
+    kinds = list(track.kinds)
+    if not (all(kind == "straight" for kind in kinds) or kinds == ["arc"]):
+        raise ValueError(f"the stability analysis is implemented on straight track or on "
+                         f"one circular arc (Track.from_segments([Arc(...)])): this track's "
+                         f"segments are {kinds}")
+
+
+def check_straight(track) -> None:
+    """ValueError unless ``track`` is ideal, rigid and straight."""
+    check_ideal(track)
     if any(kind != "straight" for kind in track.kinds):
-        raise ValueError(f"the stability analysis is implemented on straight track only: "
-                         f"this track's segments are {list(track.kinds)}")
+        raise ValueError(f"this method is implemented on straight track only: this track's "
+                         f"segments are {list(track.kinds)}")
+
+
+class SteadyMotion(NamedTuple):
+    """A steady motion (global axes, t = 0): ``q`` (7 n,) the coordinates, ``velocity``
+    (n, 3) [m/s] and ``angular_velocity`` (n, 3) [rad/s] of each body, ``frame_rate``
+    (3,) [rad/s] the angular velocity of the frame in which it is at rest (zero on
+    straight track) and ``centre`` (3,) [m] a point of that frame's axis."""
+
+    q: jax.Array
+    velocity: jax.Array
+    angular_velocity: jax.Array
+    frame_rate: jax.Array
+    centre: jax.Array
 
 
 def _small_rotation(theta):
@@ -68,48 +107,61 @@ def _small_rotation(theta):
     return qt.normalize(jnp.concatenate([jnp.ones(1), 0.5 * theta]))
 
 
-def steady_motion(vehicle, params, track, speed, model=None):
-    """``(q0, v0, omega0)``: the steady motion's coordinates (7 n,) and each body's
-    velocity and angular velocity (n, 3), global [m/s, rad/s], at the start of the
-    track."""
+def steady_motion(vehicle, params, track, speed, model=None) -> SteadyMotion:
+    """The steady motion on straight track (module docstring): the vehicle's rest pose at
+    the start of the track, every body moving along it at ``speed`` [m/s]."""
     q0, qdot0 = initial_state(vehicle, params, track, speed, 0.0, None, model)[:2]
     n = q0.shape[0] // 7
     body, rate = q0.reshape(n, 7), qdot0.reshape(n, 7)
     omega0 = 2.0 * jnp.einsum("bij,bj->bi", jax.vmap(qt.e_matrix)(body[:, 3:]), rate[:, 3:])
-    return q0, rate[:, :3], omega0
+    zero = jnp.zeros(3, q0.dtype)
+    return SteadyMotion(q0, rate[:, :3], omega0, zero, zero)
 
 
-def full_state(z, q0, v0, omega0):
-    """``(q, qdot)`` of the co-moving perturbation ``z`` (12 n,) of the steady motion."""
+def perturbed_pose(position, q0):
+    """``q`` (7 n,) of the bodies of ``q0`` moved by ``position`` (n, 6): (dr [m], theta
+    [rad]) each, the rotation applied on the left."""
     n = q0.shape[0] // 7
-    position, velocity = z[:6 * n].reshape(n, 6), z[6 * n:].reshape(n, 6)
     body = q0.reshape(n, 7)
     p = jax.vmap(lambda t, p0: qt.multiply(_small_rotation(t), p0))(position[:, 3:],
                                                                       body[:, 3:])
-    q = join_coordinates(body[:, :3] + position[:, :3], p)
-    return q, velocities_from_twists(q, v0 + velocity[:, :3], omega0 + velocity[:, 3:])
+    return join_coordinates(body[:, :3] + position[:, :3], p)
 
 
-def comoving_rhs(z, vehicle, params, track, steady, model):
-    """``z'`` (12 n,) of the perturbation ``z`` of the steady motion ``steady`` =
-    ``(q0, v0, omega0)`` (module docstring)."""
-    q0, v0, omega0 = steady
-    n = q0.shape[0] // 7
-    q, qdot = full_state(z, q0, v0, omega0)
+def full_state(z, steady: SteadyMotion):
+    """``(q, qdot)`` of the co-moving perturbation ``z`` (12 n,) of the steady motion."""
+    n = steady.q.shape[0] // 7
+    position, velocity = z[:6 * n].reshape(n, 6), z[6 * n:].reshape(n, 6)
+    q = perturbed_pose(position, steady.q)
+    v = steady.velocity + jnp.cross(steady.frame_rate, position[:, :3]) + velocity[:, :3]
+    return q, velocities_from_twists(q, v, steady.angular_velocity + velocity[:, 3:])
+
+
+def comoving_rhs(z, vehicle, params, track, steady: SteadyMotion, model):
+    """``z'`` (12 n,) of the perturbation ``z`` of the steady motion ``steady`` (module
+    docstring)."""
+    n = steady.q.shape[0] // 7
+    q, qdot = full_state(z, steady)
     qddot = vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model).reshape(n, 7)
     p = q.reshape(n, 7)[:, 3:]
     angular = 2.0 * jnp.einsum("bij,bj->bi", jax.vmap(qt.e_matrix)(p), qddot[:, 3:])
-    velocity = z[6 * n:].reshape(n, 6)
+    position, velocity = z[:6 * n].reshape(n, 6), z[6 * n:].reshape(n, 6)
+    rate = steady.frame_rate
+    spin = steady.angular_velocity - rate  # each body's angular velocity in the frame
     turned = jax.vmap(lambda t, w: qt.matvec(qt.rotation_matrix(_small_rotation(t)), w))(
-        z[:6 * n].reshape(n, 6)[:, 3:], omega0)
-    theta_rate = velocity[:, 3:] + omega0 - turned
+        position[:, 3:], spin)
+    theta_rate = velocity[:, 3:] + spin - turned
+    arm = q.reshape(n, 7)[:, :3] - steady.centre
+    linear = (qddot[:, :3] - 2.0 * jnp.cross(rate, velocity[:, :3])
+              - jnp.cross(rate, jnp.cross(rate, arm)))
+    angular = angular - jnp.cross(rate, steady.angular_velocity + velocity[:, 3:])
     return jnp.concatenate([jnp.concatenate([velocity[:, :3], theta_rate], axis=1).reshape(-1),
-                            jnp.concatenate([qddot[:, :3], angular], axis=1).reshape(-1)])
+                            jnp.concatenate([linear, angular], axis=1).reshape(-1)])
 
 
 def _joint_rows(vehicle, params, z, steady):
     """Joint constraints Phi and Phidot (normalisation rows left out) at ``z``."""
-    q, qdot = full_state(z, *steady)
+    q, qdot = full_state(z, steady)
     phi, _, phidot, _ = constraints(vehicle.system, params.system, q, qdot)
     n = vehicle.system.n_bodies
     return jnp.concatenate([phi[n:], phidot[n:]])
@@ -117,7 +169,8 @@ def _joint_rows(vehicle, params, z, steady):
 
 def linear_system(vehicle, params, track, steady, model=None):
     """``(A, C)``: the state matrix (12 n, 12 n) of the co-moving perturbation of the
-    steady motion ``steady`` = ``(q0, v0, omega0)`` (:func:`steady_motion`) and the
+    steady motion ``steady`` (:func:`steady_motion`, :func:`~jaxrail.stability.curving.
+    steady_curving`) and the
     linearised joint constraints C (2 m, 12 n) (positions, then velocities).
     Traceable: jit, vmap and differentiate it."""
     model = resolve_contact_model(model)

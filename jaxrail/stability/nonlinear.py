@@ -47,7 +47,7 @@ import numpy as np
 from ..multibody import quaternion as qt
 from ..simulation import SolverOptions, _compile, simulate, solve
 from ..vehicles.drive import SpeedDrive, check_drive
-from .linear import check_track
+from .linear import check_straight
 
 GENSYS_RATE = 5.0 / 3.6
 """[m/s^2] the ramp-down rate of GENSYS's example, 5 km/h per second."""
@@ -116,7 +116,7 @@ def attractor(t, y, window=WINDOW, threshold=THRESHOLD) -> dict:
 def check_straight_x(track) -> None:
     """ValueError unless ``track`` is ideal, rigid and straight along global x (the
     drive pushes along x)."""
-    check_track(track)
+    check_straight(track)
     heading = float(np.asarray(track.heading_start)[0])
     if abs(heading) > 1e-12:
         raise ValueError(f"the nonlinear stability methods need a straight track along "

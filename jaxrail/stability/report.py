@@ -11,9 +11,9 @@ from ..geometry import wheelset_geometry
 from ..geometry.report import conicity_entries
 from ..vehicles import get_values
 from ..simulation import SolverOptions
-from ..track import straight_track
+from ..track import Arc, Track, straight_track
 from .critical import LinearStability
-from .linear import check_track
+from .linear import check_straight
 from .nonlinear import GENSYS_RATE, brute_force, ramp_down
 
 CONICITY_AMPLITUDE_M = 3e-3  # [m] amplitude of the reported equivalent conicity
@@ -30,6 +30,27 @@ def speed_range(text: str, option: str = "--speeds") -> tuple[float, float]:
     if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low < high):
         raise ValueError(f"{option} {text!r}: give LO:HI in m/s with 0 < LO < HI, e.g. 20:150")
     return low, high
+
+
+def curve_option(text: str, option: str = "--curve") -> tuple[float, float]:
+    """``(radius [m], cant [m])`` of ``RADIUS[:CANT]``; ValueError names ``option``."""
+    parts = text.split(":")
+    try:
+        radius, cant = float(parts[0]), (float(parts[1]) if len(parts) == 2 else 0.0)
+    except (ValueError, IndexError):
+        radius = cant = math.nan
+    if len(parts) > 2 or not (math.isfinite(radius) and radius > 0.0 and math.isfinite(cant)
+                              and abs(cant) < 0.3):
+        raise ValueError(f"{option} {text!r}: give RADIUS[:CANT] in m with RADIUS > 0 and "
+                         f"|CANT| < 0.3, e.g. 3000:0.1")
+    return radius, cant
+
+
+def curve_track(radius, cant=0.0, rail_centre_distance=1.5) -> Track:
+    """A left curve of ``radius`` [m] and ``cant`` [m], 300 m of one arc from the origin
+    heading along +x (the stability analysis in a curve)."""
+    return Track.from_segments([Arc(300.0, radius, "left", cant)],
+                               rail_centre_distance=rail_centre_distance)
 
 
 def equivalent_conicity(vehicle, params, amplitude=CONICITY_AMPLITUDE_M) -> float:
@@ -56,6 +77,19 @@ def stability_study(vehicle, params, track, low, high, points=9, model=None) -> 
     row = lambda p: {"speed_m_s": p.speed, "real_part_1_s": p.eigenvalue.real,  # noqa: E731
                      "frequency_hz": p.frequency_hz, "damping_ratio": p.damping_ratio,
                      "hunting_share": p.hunting_share}
+    where = "straight track"
+    curving = {}
+    if stability.curving is not None:
+        radius = 1.0 / abs(float(track.curvature_start[0]))
+        cant = float(track.superelevation_start[0])
+        where = f"a curve of radius {radius:g} m and cant {cant:g} m"
+        state = stability.curving(critical.speed)
+        curving = {"track": {"kind": "curve", "radius_m": radius, "cant_m": cant},
+                   "steady_curving_at_critical_speed": {
+                       "wheelset_lateral_m": state.wheelset_lateral_m.tolist(),
+                       "wheelset_yaw_rad": state.wheelset_yaw_rad.tolist(),
+                       "tangential_force_n": state.tangential_force_n,
+                       "newton_iterations": state.iterations}}
     return {
         "vehicle": vehicle.name,
         "contact": stability.model.name,
@@ -64,10 +98,11 @@ def stability_study(vehicle, params, track, low, high, points=9, model=None) -> 
         "hunting_frequency_hz": critical.frequency_hz,
         "equivalent_conicity": equivalent_conicity(vehicle, params),
         "equivalent_conicity_amplitude_m": CONICITY_AMPLITUDE_M,
-        "method": ("eigenvalues of the forward-mode Jacobian about the steady motion on "
-                   "straight track; critical speed where the least damped hunting mode's "
-                   "real part crosses zero (Illinois root solve)"),
+        "method": (f"eigenvalues of the forward-mode Jacobian about the steady motion on "
+                   f"{where}; critical speed where the least damped hunting mode's "
+                   f"real part crosses zero (Illinois root solve)"),
         "root_locus": [row(p) for p in sweep],
+        **curving,
     }
 
 
@@ -86,6 +121,16 @@ def format_study(study: dict) -> str:
         f"equivalent conicity (EN 15302, "
         f"{1e3 * study['equivalent_conicity_amplitude_m']:g} mm): "
         + ("not covered by +-10 mm" if conicity is None else f"{conicity:.4f}")]
+    if "track" in study:
+        state = study["steady_curving_at_critical_speed"]
+        lines.append(
+            f"in a curve of radius {study['track']['radius_m']:g} m, cant "
+            f"{study['track']['cant_m']:g} m; steady curving at the critical speed: "
+            "wheelsets at " + ", ".join(f"{1e3 * y:+.2f} mm" for y in
+                                        state["wheelset_lateral_m"])
+            + " (left +), yawed " + ", ".join(f"{1e3 * a:+.3f} mrad" for a in
+                                            state["wheelset_yaw_rad"])
+            + f", tangential force {state['tangential_force_n']:.1f} N")
     return "\n".join(lines)
 
 
@@ -97,7 +142,7 @@ def nonlinear_study(vehicle, params, track, low, high, rate=GENSYS_RATE, resolut
     straight of ``track``'s rail centre distance long enough for the ramp.
     ``nonlinear_critical_speed_m_s`` is the brute force's (constant speeds, the
     definition); the ramp-down's is beside it with their relative difference."""
-    check_track(track)
+    check_straight(track)
     options = SolverOptions(integrator="imex") if options is None else options
     length = 100.0 + high * (hold + (high - low) / rate)
     long = straight_track(length, rail_centre_distance=track.rail_centre_distance)

@@ -17,7 +17,19 @@ use:
   resultant at the same poses (positive: restoring);
 - the linear creep coefficients per wheel, the slopes at zero creepage of the creep
   law (Polach with its options, at the patch's load and ellipse): ``f11 = -dF_x/dxi``,
-  ``f22 = -dF_y/deta`` [N], ``f23 = -dF_y/dphi`` [N m]; ``F = -f xi`` is the usual sign.
+  ``f22 = -dF_y/deta`` [N], ``f23 = -dF_y/dphi`` [N m]; ``F = -f xi`` is the usual sign;
+- the same slopes at zero longitudinal and lateral creepage but at the spin creepage
+  ``phi0`` [1/m] the centred rolling contact has (``spin_creepage_1_m``, its magnitude;
+  ``sin(gamma) / r`` on a coned tread): ``f11_spin_n``, ``f22_spin_n``,
+  ``f23_spin_n_m``. Polach's law adds ``phi a`` to the lateral creepage in its
+  resultant, so a spinning contact works further along its creep curve and its slopes
+  are lower: 0.8 % for f11 on the 1:40 cone here.
+
+Polach's law scales both creep forces by one coefficient C = sqrt((c11 xi)^2 + (c22
+eta)^2) / |(xi, eta)|, so its slopes about a steady creepage are those of that
+creepage's direction (:func:`polach_slopes_along`), and it has no derivative at zero
+creepage: the linear analysis (:mod:`jaxrail.stability.linear`) takes the slopes of the
+steady motion's own creepage (docs/stability.md).
 """
 
 import jax
@@ -27,6 +39,17 @@ from ..contact.polach import polach
 from ..vehicles.initial import _wheelset_contact, wheelset_load, wheelset_rest_pose
 from ..vehicles.loads import resolve_contact_model
 from ..track import track_frame
+
+
+def polach_slopes_along(coefficients, xi, eta):
+    """``(f11, f22)`` [N]: Polach's creep slopes for small creepages about a steady
+    creepage along ``(xi, eta)`` (module docstring), from the axis-wise slopes at the
+    rolling contact's spin (``f11_spin_n``, ``f22_spin_n`` of
+    :func:`wheelset_coefficients`, which give c11 and c22 up to a common factor)."""
+    f11, f22 = coefficients["f11_spin_n"], coefficients["f22_spin_n"]
+    norm = jnp.hypot(xi, eta)
+    return (f11 * jnp.hypot(xi, f22 / f11 * eta) / norm,
+            f22 * jnp.hypot(f11 / f22 * xi, eta) / norm)
 
 
 def _at_shift(vehicle, params, track, s, load, speed, model, lateral):
@@ -64,8 +87,9 @@ def wheelset_coefficients(vehicle, params, track, speed, s=None, model=None) -> 
                                 contact.shear_modulus, contact.poisson,
                                 parameters=contact.polach, rolling_speed=speed))
 
-    zero = jnp.zeros(2)
+    zero, spin = jnp.zeros(2), pick(forces.spin)
     d_xi, d_eta, d_phi = jax.jacfwd(creep, argnums=(0, 1, 2))(zero, zero, zero)
+    s_xi, s_eta, s_phi = jax.jacfwd(creep, argnums=(0, 1, 2))(zero, zero, spin)
     diagonal = lambda d: jnp.diagonal(d, axis1=1, axis2=2)  # (force x/y, wheel)  # noqa: E731
     return {
         "wheel_load_n": jnp.mean(n),
@@ -77,6 +101,10 @@ def wheelset_coefficients(vehicle, params, track, speed, s=None, model=None) -> 
         "f11_n": -jnp.mean(diagonal(d_xi)[0]),
         "f22_n": -jnp.mean(diagonal(d_eta)[1]),
         "f23_n_m": -jnp.mean(diagonal(d_phi)[1]),
+        "spin_creepage_1_m": jnp.mean(jnp.abs(spin)),
+        "f11_spin_n": -jnp.mean(diagonal(s_xi)[0]),
+        "f22_spin_n": -jnp.mean(diagonal(s_eta)[1]),
+        "f23_spin_n_m": -jnp.mean(diagonal(s_phi)[1]),
         "radius_difference_m": dr,
         "normal_lateral_force_n": fy,
     }

@@ -61,6 +61,19 @@ class SpeedDrive(eqx.Module):
         return forces.at[self.body, 0].add(self.force(t, qdot))
 
 
+class ConstantForce(eqx.Module):
+    """A constant force ``force`` (3,) [N], global, on body ``body`` (static): the
+    tangential force that holds a vehicle's speed in its steady curving state
+    (:mod:`jaxrail.stability.curving`)."""
+
+    body: int = eqx.field(static=True)
+    force: jnp.ndarray = eqx.field(converter=_f64)
+
+    def add_to(self, t, qdot, forces):
+        """``forces`` (n, 3) [N] with the force added on its body."""
+        return forces.at[self.body].add(self.force)
+
+
 def check_drive(drive: SpeedDrive, n_bodies: int) -> None:
     """A clear error, before compiling, for a drive on a body the system lacks or with
     numbers that are not usable."""

@@ -221,7 +221,8 @@ class VehicleLoads(eqx.Module):
 
     Fields: vehicle, params (:class:`VehicleParams`, traced), track, model (the
     contact model), drive (a :class:`~jaxrail.vehicles.drive.SpeedDrive` holding the
-    speed, or None: the vehicle coasts).
+    speed, a :class:`~jaxrail.vehicles.drive.ConstantForce`, or None: the vehicle
+    coasts).
     """
 
     vehicle: Vehicle
@@ -283,8 +284,8 @@ class VehicleLoads(eqx.Module):
 
 
 def vehicle_accelerations(vehicle: Vehicle, params: VehicleParams, track, t, q, qdot,
-                          model=None):
-    """``qddot`` (7 n,) of eq. (19) with gravity, the suspension and the wheel-rail
-    loads of ``model`` (default :class:`OnlineContact`)."""
-    loads = VehicleLoads(vehicle, params, track, resolve_contact_model(model))
+                          model=None, drive=None):
+    """``qddot`` (7 n,) of eq. (19) with gravity, the suspension, the wheel-rail loads of
+    ``model`` (default :class:`OnlineContact`) and ``drive`` (:class:`VehicleLoads`)."""
+    loads = VehicleLoads(vehicle, params, track, resolve_contact_model(model), drive)
     return accelerations(vehicle.system, params.system, t, q, qdot, loads)[0]

@@ -16,8 +16,13 @@ drives or brakes the frame unless a speed drive holds it
 (:class:`~jaxrail.vehicles.drive.SpeedDrive`, as the nonlinear stability methods do).
 
 Body order: frame, axlebox_1, wheelset_1 (the axlebox body joined to the wheelset by a
-revolute joint about the axle, as in the trailer). Straight track along global x only:
-the prismatic joint fixes the frame's path.
+revolute joint about the axle, as in the trailer). The prismatic joint fixes the frame's
+path to straight track along global x. Built with ``curve_radius`` R the frame turns
+instead about the vertical through the centre of a curve of radius R that starts at
+the origin heading along +x (``Track.from_segments([Arc(length, R, direction)])``): a
+revolute joint to the ground there, so the frame runs round the circle of radius R at
+its height, radial to it, and the wheelset curves against Wickens' frame (no cant: the
+frame does not roll with the track).
 """
 
 import dataclasses
@@ -25,7 +30,7 @@ import dataclasses
 import numpy as np
 
 from ..contact.search import SearchConfig
-from ..multibody import Prismatic, RigidBody, build_system
+from ..multibody import Prismatic, Revolute, RigidBody, build_system
 from ..profiles import rail_offset as profile_rail_offset
 from ..profiles import s1002, uic60
 from .trailer import GRAVITY, primary_bushings, trailer_values, unsprung_bodies
@@ -46,12 +51,14 @@ def frame_mass(values: dict) -> float:
 
 
 def suspended_wheelset(wheel=None, rail=None, values=None, config=SearchConfig(),
-                       contact=None) -> tuple[Vehicle, VehicleParams]:
+                       contact=None, curve_radius=None,
+                       direction="left") -> tuple[Vehicle, VehicleParams]:
     """The suspended wheelset as ``(Vehicle, VehicleParams)``; arguments as
     :func:`jaxrail.vehicles.trailer` (default values: the trailer's, with the primary
     longitudinal stiffness :data:`LONGITUDINAL_STIFFNESS`). Force elements
     ``primary_1_left``/``_right``; the joint ``guide`` holds the frame on the line
-    y = 0, z = frame height."""
+    y = 0, z = frame height, or with ``curve_radius`` [m] on the circle of that radius
+    turning ``direction`` ('left' or 'right') from the origin (module docstring)."""
     if values is None:
         values = {**trailer_values(), "primary.longitudinal_stiffness": LONGITUDINAL_STIFFNESS}
     v = values
@@ -62,8 +69,17 @@ def suspended_wheelset(wheel=None, rail=None, values=None, config=SearchConfig()
     height = v["bogie.height"]
     bodies = [RigidBody("frame", mass, (mass * FRAME_GYRATION_RADIUS**2,) * 3)]
     unsprung, unsprung_layout, joints = unsprung_bodies(v, (0.0,))
-    guide = Prismatic("ground", "frame", (0.0, 0.0, height), (0.0, 0.0, 0.0),
-                      axis_i=(1.0, 0.0, 0.0), axis_j=(1.0, 0.0, 0.0), name="guide")
+    if curve_radius is None:
+        guide = Prismatic("ground", "frame", (0.0, 0.0, height), (0.0, 0.0, 0.0),
+                          axis_i=(1.0, 0.0, 0.0), axis_j=(1.0, 0.0, 0.0), name="guide")
+    else:
+        if not (np.isfinite(curve_radius) and curve_radius > 0.0):
+            raise ValueError(f"curve_radius must be > 0 m, got {curve_radius}")
+        if direction not in ("left", "right"):
+            raise ValueError(f"direction must be 'left' or 'right', got {direction!r}")
+        centre = (1.0 if direction == "left" else -1.0) * float(curve_radius)
+        guide = Revolute("ground", "frame", (0.0, centre, height), (0.0, centre, 0.0),
+                         name="guide")
     # no vertical stiffness: the springs press the wheelset down with a constant force,
     # the frame's weight (Wickens' constant axle load), whatever the frame's height
     forces = [dataclasses.replace(b, stiffness=b.stiffness[:2] + (0.0,) + b.stiffness[3:])

@@ -14,7 +14,10 @@ import pytest
 from jaxrail.profiles import uic60
 from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.stability import LinearStability
-from jaxrail.stability.wheelset import wheelset_coefficients
+from jaxrail.stability.linear import steady_motion
+from jaxrail.stability.wheelset import polach_slopes_along, wheelset_coefficients
+from jaxrail.multibody import velocities_from_twists
+from jaxrail.vehicles.loads import contact_loads
 from jaxrail.track import Track, straight_track
 from jaxrail.track.layout import Arc, Straight
 from jaxrail.vehicles import set_values, trailer_values
@@ -40,17 +43,22 @@ def critical(wheelset):
     return stability.critical_speed(*RANGE, points=stability.sweep(RANGE))
 
 
-def _wickens(mass, yaw_inertia, lateral_stiffness, yaw_stiffness, c):
+def _wickens(mass, yaw_inertia, spin_inertia, lateral_stiffness, yaw_stiffness, c):
     """Least stable eigenvalue (Im > 0) of Wickens' 2-dof wheelset at speed V, as a
     function of V: lateral y and yaw psi, creep f11, f22, f23, conicity, gravitational
-    stiffness (Garg and Dukkipati's form, no gyroscopic terms)."""
-    f11, f22, f23 = c["f11_n"], c["f22_n"], c["f23_n_m"]
+    stiffness (Garg and Dukkipati's form) and the gyroscopic yaw moment of the spinning
+    axle rolling at lambda y / l0, I_y (V / r0) (lambda / l0) y'. The creep slopes are
+    Polach's along the steady creepage of the centred rolling wheelset: longitudinal
+    (its spin V / r0 leaves xi0 of order 1e-8, and eta0 = 0), so C = c11 for both."""
+    f11, f22 = (float(f) for f in polach_slopes_along(c, 1.0, 0.0))
+    f23 = c["f23_spin_n_m"]
     lam, l0, r0, kg = (c["conicity"], c["half_contact_distance_m"], c["rolling_radius_m"],
                        c["gravitational_stiffness_n_m"])
 
     def eigenvalue(speed):
         m = np.diag([mass, yaw_inertia])
         damping = np.array([[2 * f22, 2 * f23], [-2 * f23, 2 * f11 * l0**2]]) / speed
+        damping[1, 0] += spin_inertia * speed * lam / (r0 * l0)
         stiffness = np.array([[lateral_stiffness + kg, -2 * f22],
                               [2 * f11 * lam * l0 / r0, yaw_stiffness + 2 * f23]])
         a = np.block([[np.zeros((2, 2)), np.eye(2)],
@@ -64,10 +72,18 @@ def _wickens(mass, yaw_inertia, lateral_stiffness, yaw_stiffness, c):
 
 def test_critical_speed_matches_wickens_model(wheelset, critical):
     vehicle, params, _, coefficients = wheelset
+    # the premise of the reference's creep slopes: the steady creepage is longitudinal
+    track = straight_track(200.0)
+    steady = steady_motion(vehicle, params, track, critical.speed)
+    forces = contact_loads(vehicle, params, track, steady.q, velocities_from_twists(
+        steady.q, steady.velocity, steady.angular_velocity))[3]
+    assert np.all(np.asarray(forces.creepage_x[0, :, 0]) != 0.0)
+    assert np.all(np.asarray(forces.creepage_y[0, :, 0]) == 0.0)
     c = {k: float(v) for k, v in coefficients(params, critical.speed).items()}
     v = trailer_values()
     eigenvalue = _wickens(v["wheelset.mass"] + v["axlebox.mass"],
                           v["wheelset.yaw_inertia"] + v["axlebox.yaw_inertia"],
+                          v["wheelset.spin_inertia"],
                           2 * v["primary.lateral_stiffness"],
                           2 * LONGITUDINAL_STIFFNESS * v["axlebox.half_span"] ** 2, c)
     low, high = 10.0, 1000.0
@@ -104,5 +120,5 @@ def test_bad_inputs_are_named(wheelset, critical):
         stability.critical_speed(50.0, 40.0)
     curved = Track.from_segments([Straight(50.0), Arc(50.0, 300.0)],
                                  allow_curvature_jumps=True)
-    with pytest.raises(ValueError, match="straight track only"):
+    with pytest.raises(ValueError, match="straight track or on one circular arc"):
         LinearStability(vehicle, params, curved)

@@ -1,0 +1,218 @@
+"""The steady curving state: the vehicle's relative equilibrium in a circular curve.
+
+On a track of one circular arc (radius ``R``, constant cant) the loads do not change
+when the whole vehicle turns about the vertical axis through the curve's centre ``c``.
+A vehicle running at a constant speed ``V`` (on the centreline) then has a steady state
+in the frame turning at ``Omega = V / R`` about that axis (positive for a left curve):
+every body at rest in it, each wheelset spinning about its axle. It is what GENSYS and
+SIMPACK call the quasi-static curving state, and the linear stability in a curve is
+taken about it (:mod:`jaxrail.stability.linear`).
+
+Unknowns: each body's pose (dr [m], theta [rad] from the rest pose the vehicle has on
+the arc, :func:`jaxrail.vehicles.initial_state`), each wheelset's spin [rad/s] about its
+axle, and the tangential force ``F`` [N] on one body (the carbody, else the frame, else
+the first wheelset) that holds the speed against the curving resistance, as a traction
+or speed controller does. Equations: every body's acceleration in the turning frame is
+zero (eq. (19) with the frame's centripetal and gyroscopic terms) and the joints hold.
+Newton's method with least-squares steps (the Jacobian by forward-mode
+differentiation): the rotation of the whole vehicle about the curve's axis and each
+wheelset's angle about its axle leave the equations unchanged, and the minimum-norm
+step leaves them alone.
+"""
+
+import dataclasses
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..multibody import constraints, velocities_from_twists
+from ..multibody import quaternion as qt
+from ..track import to_track_coordinates, track_frame
+from ..vehicles.drive import ConstantForce
+from ..vehicles.loads import resolve_contact_model, vehicle_accelerations
+from .linear import SteadyMotion, perturbed_pose, steady_motion
+
+MAX_ITERATIONS = 30
+STEP_TOLERANCE = 1e-11  # [m, rad]: Newton stops when a step moves every pose by less
+RESIDUAL_TOLERANCE = 1e-6  # [m/s^2, rad/s^2] largest acceleration left at convergence
+
+
+def curve_frame(track, speed):
+    """``(frame_rate (3,), centre (3,))``: the angular velocity [rad/s] of the frame in
+    which the steady curving state at ``speed`` [m/s] is at rest, and the curve's centre
+    [m] (global), of a track of one arc."""
+    kappa = track.curvature_start[0]
+    heading = track.heading_start[0]
+    centre = jnp.stack([track.x_start[0] - jnp.sin(heading) / kappa,
+                        track.y_start[0] + jnp.cos(heading) / kappa, jnp.zeros(())])
+    return jnp.stack([jnp.zeros(()), jnp.zeros(()), kappa * speed]), centre
+
+
+def held_body(vehicle) -> int:
+    """The body the tangential force acts on: the carbody, else the frame, else the
+    first wheelset."""
+    for name in ("carbody", "frame"):
+        if name in vehicle.system.body_names:
+            return vehicle.system.body_names.index(name)
+    return int(vehicle.wheelsets[0])
+
+
+def check_curving_vehicle(vehicle, params) -> None:
+    """ValueError for a vehicle whose joints to the ground do not turn with the curve:
+    only a revolute joint about the vertical does (the suspended wheelset built with
+    ``curve_radius``); a prismatic guide holds a straight path."""
+    for group in vehicle.system.joint_groups:
+        grounded = [name for i, j, name in zip(group.body_i, group.body_j, group.names)
+                    if i < 0 or j < 0]
+        if grounded and group.kind != "revolute":
+            raise ValueError(f"{vehicle.name!r} is held to the ground by the {group.kind} "
+                             f"joint(s) {grounded}: it cannot run round a curve (build the "
+                             f"suspended wheelset with curve_radius=R for a curve)")
+
+
+def _state(u, base: SteadyMotion, wheelsets, frame_rate, centre):
+    """``(q, velocity (n, 3), angular velocity (n, 3))`` of the unknowns ``u``."""
+    n = base.q.shape[0] // 7
+    q = perturbed_pose(u[:6 * n].reshape(n, 6), base.q)
+    axle = jax.vmap(qt.rotation_matrix)(q.reshape(n, 7)[:, 3:])[:, :, 1]
+    spin = jnp.zeros(n).at[wheelsets].set(u[6 * n:6 * n + len(wheelsets)])
+    omega = frame_rate + spin[:, None] * axle
+    velocity = jnp.cross(frame_rate, q.reshape(n, 7)[:, :3] - centre)
+    return q, velocity, omega
+
+
+def _tangent(point, frame_rate, centre):
+    """Unit horizontal direction [-] of travel at ``point`` round the curve's axis."""
+    arm = (point - centre).at[2].set(0.0)
+    direction = jnp.cross(jnp.sign(frame_rate[2]) * jnp.array([0.0, 0.0, 1.0]), arm)
+    return direction / jnp.linalg.norm(direction)
+
+
+def curving_residual(u, vehicle, params, track, base, frame_rate, centre, body, model):
+    """The turning frame's accelerations (6 n,) [m/s^2, rad/s^2] of every body and the
+    joint constraints [m, rad] at the unknowns ``u`` (module docstring)."""
+    n = base.q.shape[0] // 7
+    wheelsets = np.asarray(vehicle.wheelsets)
+    q, velocity, omega = _state(u, base, wheelsets, frame_rate, centre)
+    qdot = velocities_from_twists(q, velocity, omega)
+    bodies = q.reshape(n, 7)
+    force = ConstantForce(body, u[-1] * _tangent(bodies[body, :3], frame_rate, centre))
+    qddot = vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model,
+                                  force).reshape(n, 7)
+    alpha = 2.0 * jnp.einsum("bij,bj->bi", jax.vmap(qt.e_matrix)(bodies[:, 3:]),
+                             qddot[:, 3:])
+    linear = qddot[:, :3] - jnp.cross(frame_rate, jnp.cross(frame_rate, bodies[:, :3] - centre))
+    angular = alpha - jnp.cross(frame_rate, omega)
+    phi = constraints(vehicle.system, params.system, q, qdot)[0][n:]
+    return jnp.concatenate([jnp.concatenate([linear, angular], axis=1).reshape(-1), phi])
+
+
+@dataclasses.dataclass(frozen=True)
+class CurvingState:
+    """The steady curving state at one speed (host values).
+
+    Fields: steady (:class:`~jaxrail.stability.linear.SteadyMotion`), speed [m/s],
+    tangential_force_n [N] (the force that holds the speed: the curving resistance),
+    wheelset_lateral_m (W,) [m] (each wheelset's centre in the track frame, + left),
+    wheelset_yaw_rad (W,) [rad] (each axle's yaw to the track's radial line, + left),
+    iterations, residual (largest acceleration left [m/s^2, rad/s^2]).
+    """
+
+    steady: SteadyMotion
+    speed: float
+    tangential_force_n: float
+    wheelset_lateral_m: np.ndarray
+    wheelset_yaw_rad: np.ndarray
+    iterations: int
+    residual: float
+
+
+class SteadyCurving:
+    """The steady curving state of ``vehicle`` on ``track`` (one arc), compiled once
+    (the speed, the parameters and the track's numbers traced):
+    ``SteadyCurving(vehicle, params, track, model)(speed, params=None, track=None)`` ->
+    :class:`CurvingState`."""
+
+    def __init__(self, vehicle, params, track, model=None):
+        _check_arc(track)
+        check_curving_vehicle(vehicle, params)
+        self.vehicle, self.params, self.track = vehicle, params, track
+        self.model = model = resolve_contact_model(model)
+        body = held_body(vehicle)
+        wheelsets = np.asarray(vehicle.wheelsets)
+
+        def setup(params, track, speed):
+            base = steady_motion(vehicle, params, track, speed, model)
+            frame_rate, centre = curve_frame(track, speed)
+            n = base.q.shape[0] // 7
+            axle = jax.vmap(qt.rotation_matrix)(base.q.reshape(n, 7)[:, 3:])[:, :, 1]
+            spin = jnp.einsum("wi,wi->w", base.angular_velocity[wheelsets], axle[wheelsets])
+            u0 = jnp.concatenate([jnp.zeros(6 * n), spin, jnp.zeros(1)])
+            return base, frame_rate, centre, u0
+
+        def residual(u, params, track, setup_values):
+            base, frame_rate, centre, _ = setup_values
+            return curving_residual(u, vehicle, params, track, base, frame_rate, centre,
+                                    body, model)
+
+        def report(u, track, setup_values):
+            base, frame_rate, centre, _ = setup_values
+            q, velocity, omega = _state(u, base, wheelsets, frame_rate, centre)
+            bodies = q.reshape(-1, 7)
+
+            def wheelset(k):
+                s, lateral, _ = to_track_coordinates(track, bodies[k, :3])
+                axes = track_frame(track, s)
+                axle = qt.rotation_matrix(bodies[k, 3:])[:, 1]
+                return lateral, jnp.arctan2(-axle @ axes[:, 0], axle @ axes[:, 1])
+
+            lateral, yaw = jax.vmap(wheelset)(jnp.asarray(wheelsets))
+            return SteadyMotion(q, velocity, omega, frame_rate, centre), lateral, yaw
+
+        self._setup = eqx.filter_jit(setup)
+        self._residual = eqx.filter_jit(residual)
+        self._jacobian = eqx.filter_jit(jax.jacfwd(residual))
+        self._report = eqx.filter_jit(report)
+
+    def __call__(self, speed, params=None, track=None) -> CurvingState:
+        params = self.params if params is None else params
+        track = self.track if track is None else track
+        _check_arc(track)
+        speed = float(speed)
+        if not (np.isfinite(speed) and speed > 0.0):
+            raise ValueError(f"steady curving: the speed must be > 0 m/s, got {speed}")
+        setup_values = self._setup(params, track, jnp.asarray(speed, jnp.float64))
+        u = np.asarray(setup_values[3])
+        n = self.vehicle.system.n_bodies
+        norm = lambda r: np.linalg.norm(r) if np.all(np.isfinite(r)) else np.inf  # noqa: E731
+        r = np.asarray(self._residual(u, params, track, setup_values))
+        for iteration in range(1, MAX_ITERATIONS + 1):
+            jacobian = np.asarray(self._jacobian(u, params, track, setup_values))
+            step = np.linalg.lstsq(jacobian, -r, rcond=1e-13)[0]
+            small = np.max(np.abs(step[:6 * n])) < STEP_TOLERANCE
+            # halve a step that makes the residual worse (a flange met too hard)
+            for _ in range(20):
+                r_trial = np.asarray(self._residual(u + step, params, track, setup_values))
+                if small or norm(r_trial) <= norm(r):
+                    break
+                step = 0.5 * step
+            u, r = u + step, r_trial
+            if small:
+                break
+        largest = float(np.max(np.abs(r[:6 * n])))
+        if not largest < RESIDUAL_TOLERANCE:
+            raise ValueError(f"steady curving at {speed:g} m/s: Newton's method left an "
+                             f"acceleration of {largest:.3g} after {iteration} iterations "
+                             f"(no steady curving state near the centred start: a flange "
+                             f"climb, or a curve too tight for the speed?)")
+        steady, lateral, yaw = self._report(u, track, setup_values)
+        return CurvingState(steady, speed, float(u[-1]), np.asarray(lateral), np.asarray(yaw),
+                            iteration, largest)
+
+
+def _check_arc(track) -> None:
+    if list(track.kinds) != ["arc"]:
+        raise ValueError(f"the steady curving state needs a track of one arc "
+                         f"(Track.from_segments([Arc(...)])), got {list(track.kinds)}")
