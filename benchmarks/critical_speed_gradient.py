@@ -1,4 +1,4 @@
-"""The suspended wheelset's linear critical speed and its gradient with respect to three
+"""The suspended wheelset's linear critical speed and its gradient with respect to four
 parameters (implicit differentiation, jaxrail.stability), against central differences
 of the critical speed itself; prints JSON.
 
@@ -21,7 +21,8 @@ from jaxrail.track import straight_track  # noqa: E402
 from jaxrail.vehicles import get_values, set_values  # noqa: E402
 from jaxrail.vehicles.suspended_wheelset import suspended_wheelset  # noqa: E402
 
-NAMES = ("primary_longitudinal_stiffness", "primary_lateral_stiffness", "friction")
+NAMES = ("primary_longitudinal_stiffness", "primary_lateral_stiffness", "friction",
+         "wheelset_mass")
 RANGE = (60.0, 140.0)  # [m/s]
 
 

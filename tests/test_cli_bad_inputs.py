@@ -59,6 +59,10 @@ BAD_INPUTS = [
      "--nonlinear '95:65': give LO:HI in m/s with 0 < LO < HI"),
     (["stability", "suspended-wheelset", "--nonlinear", "65:95", "--ramp-rate", "0"],
      "--ramp-rate 0 and --resolution 0.5 must be > 0"),
+    (["stability", "suspended-wheelset", "--curve", "-300"],
+     "--curve '-300': give RADIUS[:CANT] in m with RADIUS > 0"),
+    (["stability", "suspended-wheelset", "--curve", "3000:0.1", "--nonlinear", "65:95"],
+     "--nonlinear runs on straight track only: leave out --curve"),
 ]
 
 

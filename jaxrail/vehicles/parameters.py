@@ -123,6 +123,16 @@ def _bushing(family, field, column, unit, description, range_):
                      f"{family} suspension {description}, per element", get, set_, range_)
 
 
+def _wheelset_mass_get(vehicle, params):
+    return jnp.mean(params.system.bodies.mass[jnp.asarray(vehicle.wheelsets)])
+
+
+def _wheelset_mass_set(vehicle, params, value):
+    where = lambda p: p.system.bodies.mass  # noqa: E731
+    return eqx.tree_at(where, params, where(params).at[jnp.asarray(vehicle.wheelsets)].set(
+        jnp.asarray(value, jnp.float64)))
+
+
 _AXES = {"longitudinal": 0, "lateral": 1, "vertical": 2}
 PARAMETERS = {p.name: p for p in [
     _contact("stiffness_scale", "-", "factor on the Hertz contact stiffness (1 = Hertz)",
@@ -139,6 +149,10 @@ PARAMETERS = {p.name: p for p in [
               "their tops", _gauge_get, _gauge_set, (0.6, 1.7)),
     Parameter("wheelbase", "m", "axle spacing of each bogie", _wheelbase_get,
               _wheelbase_set, (0.5, 5.0)),
+    # the unsprung mass: each wheelset's weight adds to its wheel loads and to the rest
+    # pose's load (the suspension's preloads carry the sprung masses, unchanged)
+    Parameter("wheelset_mass", "kg", "mass of each wheelset body (its inertia unchanged)",
+              _wheelset_mass_get, _wheelset_mass_set, (100.0, 1e4)),
 ]}
 
 

@@ -12,6 +12,7 @@ from jaxrail.multibody.forces import element_deformation
 from jaxrail.track import straight_track
 from jaxrail.vehicles import bogie, trailer, trailer_values, vehicle_accelerations
 from jaxrail.vehicles.parameters import PARAMETERS, get_values, set_values
+from jaxrail.vehicles.initial import wheelset_load
 from jaxrail.vehicles.wheel_rail import ContactParameters
 
 VALUES = trailer_values()
@@ -128,3 +129,18 @@ def test_gauge_and_wheelbase_gradients_under_jit_and_vmap():
         assert abs(float(grad[i]) / float(central) - 1.0) < 1e-4, (i, grad[i], central)
     batch = jnp.array([[1.437, 2.5], [1.433, 2.7]])
     assert np.allclose(jax.vmap(evaluate)(batch), [evaluate(b) for b in batch], rtol=1e-12)
+
+
+def test_wheelset_mass_sets_each_wheelset_and_its_load():
+    vehicle, params = trailer()
+    wheelsets = np.asarray(vehicle.wheelsets)
+    assert np.isclose(get_values(vehicle, params, ("wheelset_mass",))[0],
+                      VALUES["wheelset.mass"])
+    heavier = set_values(vehicle, params, ("wheelset_mass",),
+                         jnp.array([VALUES["wheelset.mass"] + 100.0]))
+    mass, before = np.asarray(heavier.system.bodies.mass), np.asarray(params.system.bodies.mass)
+    assert np.allclose(mass[wheelsets], VALUES["wheelset.mass"] + 100.0)
+    assert np.array_equal(np.delete(mass, wheelsets), np.delete(before, wheelsets))
+    # each wheelset carries its own 100 kg more: 981 N of wheel load, the sprung load kept
+    gain = wheelset_load(vehicle, heavier) - wheelset_load(vehicle, params)
+    assert np.isclose(gain, 100.0 * -float(params.system.gravity[2]))
