@@ -15,9 +15,13 @@ the first wheelset) that holds the speed against the curving resistance, as a tr
 or speed controller does. Equations: every body's acceleration in the turning frame is
 zero (eq. (19) with the frame's centripetal and gyroscopic terms) and the joints hold.
 Newton's method with least-squares steps (the Jacobian by forward-mode
-differentiation): the rotation of the whole vehicle about the curve's axis and each
-wheelset's angle about its axle leave the equations unchanged, and the minimum-norm
-step leaves them alone.
+differentiation, its columns scaled): the rotation of the whole vehicle about the
+curve's axis and each wheelset's angle about its axle leave the equations unchanged,
+and the minimum-norm step leaves them alone. Steps move no pose by more than 1 mm or
+1 mrad and are halved while they raise the residual: the start (every body on its own
+station of the arc) yaws a bogie's wheelsets radially against stiff primary springs,
+and Polach's law, which has no derivative at zero creepage, makes the first linear
+models poor.
 """
 
 import dataclasses
@@ -34,8 +38,10 @@ from ..vehicles.drive import ConstantForce
 from ..vehicles.loads import resolve_contact_model, vehicle_accelerations
 from .linear import SteadyMotion, perturbed_pose, steady_motion
 
-MAX_ITERATIONS = 30
+MAX_ITERATIONS = 60
 STEP_TOLERANCE = 1e-11  # [m, rad]: Newton stops when a step moves every pose by less
+MAX_STEP = 1e-3  # [m, rad]: the largest move of a pose in one step (a trust region)
+SINGULAR = 1e-10  # relative singular value below which a direction is left alone
 RESIDUAL_TOLERANCE = 1e-6  # [m/s^2, rad/s^2] largest acceleration left at convergence
 
 
@@ -129,6 +135,18 @@ class CurvingState:
     residual: float
 
 
+def newton_step(jacobian, residual):
+    """The minimum-norm least-squares step ``-J^+ r`` with J's columns scaled to unit
+    norm and singular values under :data:`SINGULAR` (relative) left out: the rotation
+    about the curve's axis and the wheelsets' angles are not moved, and the tangential
+    force (its column of order 1 / mass) weighs like a pose."""
+    scale = np.linalg.norm(jacobian, axis=0)
+    scale = np.where(scale > 0.0, scale, 1.0)
+    u, s, vt = np.linalg.svd(jacobian / scale, full_matrices=False)
+    keep = s > SINGULAR * s[0]
+    return (vt[keep].T @ ((u[:, keep].T @ -residual) / s[keep])) / scale
+
+
 class SteadyCurving:
     """The steady curving state of ``vehicle`` on ``track`` (one arc), compiled once
     (the speed, the parameters and the track's numbers traced):
@@ -190,10 +208,12 @@ class SteadyCurving:
         r = np.asarray(self._residual(u, params, track, setup_values))
         for iteration in range(1, MAX_ITERATIONS + 1):
             jacobian = np.asarray(self._jacobian(u, params, track, setup_values))
-            step = np.linalg.lstsq(jacobian, -r, rcond=1e-13)[0]
-            small = np.max(np.abs(step[:6 * n])) < STEP_TOLERANCE
-            # halve a step that makes the residual worse (a flange met too hard)
-            for _ in range(20):
+            step = newton_step(jacobian, r)
+            moves = np.max(np.abs(step[:6 * n]))
+            small = moves < STEP_TOLERANCE
+            step = step * min(1.0, MAX_STEP / max(moves, 1e-300))
+            # halve a step that makes the residual worse
+            for _ in range(12):
                 r_trial = np.asarray(self._residual(u + step, params, track, setup_values))
                 if small or norm(r_trial) <= norm(r):
                     break
