@@ -23,7 +23,7 @@ import numpy as np
 from jax.flatten_util import ravel_pytree
 
 from ..vehicles.loads import resolve_contact_model
-from ..vehicles.parameters import get_values, parameter, set_values
+from ..vehicles.parameters import PROFILE_PARAMETERS, get_values, parameter, set_values
 from .curving import SteadyCurving
 from .linear import check_track, comoving_rhs, linear_system, modes, steady_motion
 
@@ -142,6 +142,11 @@ class LinearStability:
         names = tuple(names)
         for name in names:
             parameter(name)
+        fixed = [name for name in names if name in PROFILE_PARAMETERS]
+        if fixed and getattr(self.model, "name", "") == "table":
+            raise ValueError(f"{fixed}: the contact table is built for one profile pair "
+                             f"at one gauge and does not follow them; take this gradient "
+                             f"with the paper's search (online)")
         if self.curving is not None:
             raise ValueError("the critical speed's gradient is implemented on straight "
                              "track only (in a curve the steady curving state would need "

@@ -189,6 +189,7 @@ class SteadyCurving:
             lateral, yaw = jax.vmap(wheelset)(jnp.asarray(wheelsets))
             return SteadyMotion(q, velocity, omega, frame_rate, centre), lateral, yaw
 
+        self._last = None  # (params, track, u) of the last state solved: the next start
         self._setup = eqx.filter_jit(setup)
         self._residual = eqx.filter_jit(residual)
         self._jacobian = eqx.filter_jit(jax.jacfwd(residual))
@@ -204,6 +205,10 @@ class SteadyCurving:
         setup_values = self._setup(params, track, jnp.asarray(speed, jnp.float64))
         u = np.asarray(setup_values[3])
         n = self.vehicle.system.n_bodies
+        if self._last is not None and self._last[0] is params and self._last[1] is track:
+            # the last speed's poses and tangential force, the spins scaled to this speed
+            last = self._last[2]
+            u = np.concatenate([last[:6 * n], u[6 * n:-1], last[-1:]])
         norm = lambda r: np.linalg.norm(r) if np.all(np.isfinite(r)) else np.inf  # noqa: E731
         r = np.asarray(self._residual(u, params, track, setup_values))
         for iteration in range(1, MAX_ITERATIONS + 1):
@@ -227,6 +232,7 @@ class SteadyCurving:
                              f"acceleration of {largest:.3g} after {iteration} iterations "
                              f"(no steady curving state near the centred start: a flange "
                              f"climb, or a curve too tight for the speed?)")
+        self._last = (params, track, u)
         steady, lateral, yaw = self._report(u, track, setup_values)
         return CurvingState(steady, speed, float(u[-1]), np.asarray(lateral), np.asarray(yaw),
                             iteration, largest)

@@ -19,6 +19,7 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from .._ranges import within
+from ..profiles.analytic import ConicalProfile
 from ..profiles.measures import gauge_point, rail_offset
 from .vehicle import Vehicle, VehicleParams
 
@@ -133,6 +134,29 @@ def _wheelset_mass_set(vehicle, params, value):
         jnp.asarray(value, jnp.float64)))
 
 
+def _cone(params):
+    surfaces = getattr(params.wheel, "surfaces", ())
+    if len(surfaces) != 1 or not isinstance(surfaces[0], ConicalProfile):
+        raise ValueError(f"the wheel {getattr(params.wheel, 'name', '?')!r} has no cone angle "
+                         f"(only conical_wheel's has; a measured profile such as S1002 is "
+                         f"not parametric)")
+    return surfaces[0]
+
+
+def _cone_get(vehicle, params):
+    return _cone(params).cone_angle
+
+
+def _cone_set(vehicle, params, value):
+    _cone(params)
+    return eqx.tree_at(lambda p: p.wheel.surfaces[0].cone_angle, params,
+                       jnp.asarray(value, jnp.float64))
+
+
+PROFILE_PARAMETERS = ("track_gauge", "wheel_cone_angle")
+"""The named parameters that change the wheel-rail geometry: a contact table, built for
+one profile pair at one gauge, does not follow them."""
+
 _AXES = {"longitudinal": 0, "lateral": 1, "vertical": 2}
 PARAMETERS = {p.name: p for p in [
     _contact("stiffness_scale", "-", "factor on the Hertz contact stiffness (1 = Hertz)",
@@ -153,6 +177,9 @@ PARAMETERS = {p.name: p for p in [
     # pose's load (the suspension's preloads carry the sprung masses, unchanged)
     Parameter("wheelset_mass", "kg", "mass of each wheelset body (its inertia unchanged)",
               _wheelset_mass_get, _wheelset_mass_set, (100.0, 1e4)),
+    # the conicity of a coned wheel (lambda = tan of its angle on a rail inclined alike)
+    Parameter("wheel_cone_angle", "rad", "cone angle of a coned wheel (conical_wheel)",
+              _cone_get, _cone_set, (0.001, 0.2)),
 ]}
 
 

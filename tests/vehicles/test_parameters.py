@@ -7,11 +7,14 @@ import numpy as np
 import pytest
 
 from jaxrail.contact.normal import Hertz
+from jaxrail.profiles import uic60
+from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.multibody import join_coordinates
 from jaxrail.multibody.forces import element_deformation
 from jaxrail.track import straight_track
 from jaxrail.vehicles import bogie, trailer, trailer_values, vehicle_accelerations
 from jaxrail.vehicles.parameters import PARAMETERS, get_values, set_values
+from jaxrail.vehicles.suspended_wheelset import suspended_wheelset
 from jaxrail.vehicles.initial import wheelset_load
 from jaxrail.vehicles.wheel_rail import ContactParameters
 
@@ -144,3 +147,23 @@ def test_wheelset_mass_sets_each_wheelset_and_its_load():
     # each wheelset carries its own 100 kg more: 981 N of wheel load, the sprung load kept
     gain = wheelset_load(vehicle, heavier) - wheelset_load(vehicle, params)
     assert np.isclose(gain, 100.0 * -float(params.system.gravity[2]))
+
+
+def test_the_cone_angle_of_a_coned_wheel_is_named_and_a_measured_profile_has_none():
+    vehicle, params = suspended_wheelset(conical_wheel(0.025), uic60("1:40"))
+    steeper = set_values(vehicle, params, ("wheel_cone_angle",), jnp.array([0.03]))
+    assert np.isclose(get_values(vehicle, steeper, ("wheel_cone_angle",))[0], 0.03)
+    # the profile itself changes: its height 10 mm off centre is -tan(angle) y
+    assert np.isclose(float(steeper.wheel.surfaces[0].height(0.01)), -np.tan(0.03) * 0.01)
+    s1002_vehicle, s1002_params = suspended_wheelset()
+    with pytest.raises(ValueError, match="'S1002' has no cone angle"):
+        get_values(s1002_vehicle, s1002_params, ("wheel_cone_angle",))
+
+
+def test_a_contact_table_refuses_the_geometry_parameters_before_building():
+    from jaxrail.montecarlo import run_samples
+    from jaxrail.scenarios import load_scenario
+
+    with pytest.raises(ValueError, match=r"\['track_gauge'\]: the contact table is built"):
+        run_samples(load_scenario("straight"), {"track_gauge": np.array([1.43, 1.44])},
+                    contact="table")
