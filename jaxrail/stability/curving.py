@@ -21,7 +21,9 @@ and the minimum-norm step leaves them alone. Steps move no pose by more than 1 m
 1 mrad and are halved while they raise the residual: the start (every body on its own
 station of the arc) yaws a bogie's wheelsets radially against stiff primary springs,
 and Polach's law, which has no derivative at zero creepage, makes the first linear
-models poor.
+models poor. Where Newton's method does not converge from there, the vehicle runs
+:data:`SETTLE_S` s round the arc from its rest pose (the time integration, IMEX) and
+Newton's method starts again from where it went, turned back about the curve's axis.
 """
 
 import dataclasses
@@ -41,6 +43,9 @@ from .linear import SteadyMotion, perturbed_pose, steady_motion
 MAX_ITERATIONS = 60
 STEP_TOLERANCE = 1e-11  # [m, rad]: Newton stops when a step moves every pose by less
 MAX_STEP = 1e-3  # [m, rad]: the largest move of a pose in one step (a trust region)
+FIRST_ITERATIONS = 60  # from the rest pose (or the last speed's state), before settling
+SPEED_STEP = 5.0  # [m/s]: a state further from the last one solved is reached in steps
+SETTLE_S = 3.0  # [s] simulated from the rest pose when Newton's method does not converge
 SINGULAR = 1e-10  # relative singular value below which a direction is left alone
 RESIDUAL_TOLERANCE = 1e-6  # [m/s^2, rad/s^2] largest acceleration left at convergence
 
@@ -87,6 +92,32 @@ def _state(u, base: SteadyMotion, wheelsets, frame_rate, centre):
     omega = frame_rate + spin[:, None] * axle
     velocity = jnp.cross(frame_rate, q.reshape(n, 7)[:, :3] - centre)
     return q, velocity, omega
+
+
+def unknowns_of_state(q, qdot, base: SteadyMotion, wheelsets, centre, body):
+    """The unknowns (host NumPy, the tangential force zero) of a state ``(q, qdot)``
+    anywhere round the arc: turned back about the curve's axis until body ``body`` is
+    where it is in ``base``, then measured from ``base``."""
+    n = base.q.shape[0] // 7
+    bodies, rest = np.asarray(q).reshape(n, 7), np.asarray(base.q).reshape(n, 7)
+    centre = np.asarray(centre)
+    arm, home = bodies[body, :2] - centre[:2], rest[body, :2] - centre[:2]
+    angle = np.arctan2(home[1], home[0]) - np.arctan2(arm[1], arm[0])
+    turn = np.asarray(qt.rotation_matrix(qt.from_axis_angle(np.array([0.0, 0.0, 1.0]),
+                                                            angle)))
+    position = centre + (bodies[:, :3] - centre) @ turn.T
+    p = np.asarray(jax.vmap(lambda a: qt.multiply(qt.from_axis_angle(
+        jnp.array([0.0, 0.0, 1.0]), angle), a))(jnp.asarray(bodies[:, 3:])))
+    conjugate = rest[:, 3:] * np.array([1.0, -1.0, -1.0, -1.0])
+    relative = np.asarray(jax.vmap(qt.multiply)(jnp.asarray(p), jnp.asarray(conjugate)))
+    theta = 2.0 * np.sign(relative[:, :1]) * relative[:, 1:]  # small rotation vectors
+    rates = np.asarray(qdot).reshape(n, 7)[:, 3:]
+    omega = 2.0 * np.einsum("bij,bj->bi", np.asarray(jax.vmap(qt.e_matrix)(
+        jnp.asarray(bodies[:, 3:]))), rates) @ turn.T
+    axle = np.asarray(jax.vmap(qt.rotation_matrix)(jnp.asarray(p)))[:, :, 1]
+    spin = np.einsum("wi,wi->w", omega[wheelsets], axle[wheelsets])
+    return np.concatenate([np.concatenate([position - rest[:, :3], theta], axis=1).reshape(-1),
+                           spin, np.zeros(1)])
 
 
 def _tangent(point, frame_rate, centre):
@@ -189,29 +220,18 @@ class SteadyCurving:
             lateral, yaw = jax.vmap(wheelset)(jnp.asarray(wheelsets))
             return SteadyMotion(q, velocity, omega, frame_rate, centre), lateral, yaw
 
-        self._last = None  # (params, track, u) of the last state solved: the next start
+        self._last = None  # (params, track, speed, u) of the last state: the next start
         self._setup = eqx.filter_jit(setup)
         self._residual = eqx.filter_jit(residual)
         self._jacobian = eqx.filter_jit(jax.jacfwd(residual))
         self._report = eqx.filter_jit(report)
 
-    def __call__(self, speed, params=None, track=None) -> CurvingState:
-        params = self.params if params is None else params
-        track = self.track if track is None else track
-        _check_arc(track)
-        speed = float(speed)
-        if not (np.isfinite(speed) and speed > 0.0):
-            raise ValueError(f"steady curving: the speed must be > 0 m/s, got {speed}")
-        setup_values = self._setup(params, track, jnp.asarray(speed, jnp.float64))
-        u = np.asarray(setup_values[3])
+    def _newton(self, u, params, track, setup_values, iterations=MAX_ITERATIONS):
+        """(u, residual, iterations) of Newton's method from ``u`` (module docstring)."""
         n = self.vehicle.system.n_bodies
-        if self._last is not None and self._last[0] is params and self._last[1] is track:
-            # the last speed's poses and tangential force, the spins scaled to this speed
-            last = self._last[2]
-            u = np.concatenate([last[:6 * n], u[6 * n:-1], last[-1:]])
         norm = lambda r: np.linalg.norm(r) if np.all(np.isfinite(r)) else np.inf  # noqa: E731
         r = np.asarray(self._residual(u, params, track, setup_values))
-        for iteration in range(1, MAX_ITERATIONS + 1):
+        for iteration in range(1, iterations + 1):
             jacobian = np.asarray(self._jacobian(u, params, track, setup_values))
             step = newton_step(jacobian, r)
             moves = np.max(np.abs(step[:6 * n]))
@@ -226,13 +246,53 @@ class SteadyCurving:
             u, r = u + step, r_trial
             if small:
                 break
+        return u, r, iteration
+
+    def _settle(self, speed, params, track):
+        """``(q, qdot)`` after :data:`SETTLE_S` s of running round the arc from the rest
+        pose at ``speed`` [m/s] (IMEX; the vehicle coasts: the curving resistance slows
+        it by a few mm/s)."""
+        from ..simulation import SolverOptions, simulate
+
+        result = simulate(self.vehicle, params, track, SETTLE_S, speed,
+                          options=SolverOptions(integrator="imex"), contact_model=self.model)
+        if result.status != "successful":
+            raise ValueError(f"steady curving at {speed:g} m/s: the settling run ended "
+                             f"{result.status} at {float(result.simulated_time_s):.2f} s")
+        return np.asarray(result.q)[-1], np.asarray(result.qdot)[-1]
+
+    def __call__(self, speed, params=None, track=None) -> CurvingState:
+        params = self.params if params is None else params
+        track = self.track if track is None else track
+        _check_arc(track)
+        speed = float(speed)
+        if not (np.isfinite(speed) and speed > 0.0):
+            raise ValueError(f"steady curving: the speed must be > 0 m/s, got {speed}")
+        setup_values = self._setup(params, track, jnp.asarray(speed, jnp.float64))
+        u = np.asarray(setup_values[3])
+        n = self.vehicle.system.n_bodies
+        if self._last is not None and self._last[0] is params and self._last[1] is track:
+            previous = self._last[2]
+            if abs(speed - previous) > SPEED_STEP:  # continuation: through the speeds between
+                self(previous + np.sign(speed - previous) * SPEED_STEP, params, track)
+            # the last speed's poses and tangential force, the spins of this speed
+            last = self._last[3]
+            u = np.concatenate([last[:6 * n], u[6 * n:-1], last[-1:]])
+        u, r, iteration = self._newton(u, params, track, setup_values, FIRST_ITERATIONS)
+        if not np.max(np.abs(r[:6 * n])) < RESIDUAL_TOLERANCE:
+            # settle by a simulation from the rest pose, then Newton from where it went
+            q, qdot = self._settle(speed, params, track)
+            u = unknowns_of_state(q, qdot, setup_values[0], np.asarray(self.vehicle.wheelsets),
+                                  setup_values[2], held_body(self.vehicle))
+            u, r, more = self._newton(u, params, track, setup_values)
+            iteration += more
         largest = float(np.max(np.abs(r[:6 * n])))
         if not largest < RESIDUAL_TOLERANCE:
             raise ValueError(f"steady curving at {speed:g} m/s: Newton's method left an "
                              f"acceleration of {largest:.3g} after {iteration} iterations "
                              f"(no steady curving state near the centred start: a flange "
                              f"climb, or a curve too tight for the speed?)")
-        self._last = (params, track, u)
+        self._last = (params, track, speed, u)
         steady, lateral, yaw = self._report(u, track, setup_values)
         return CurvingState(steady, speed, float(u[-1]), np.asarray(lateral), np.asarray(yaw),
                             iteration, largest)
