@@ -26,6 +26,7 @@ _SLOWEST_FIRST = (
     "tests/vehicles/test_trailer.py",
     "tests/montecarlo/test_distributed.py",
     "tests/stability/test_linear_stability.py",
+    "tests/stability/test_curving.py",
     "tests/test_progress.py",
     "tests/vehicles/test_klingel.py",
     "tests/montecarlo/test_resume.py",

@@ -252,10 +252,13 @@ class SteadyCurving:
         """``(q, qdot)`` after :data:`SETTLE_S` s of running round the arc from the rest
         pose at ``speed`` [m/s] (IMEX; the vehicle coasts: the curving resistance slows
         it by a few mm/s)."""
-        from ..simulation import SolverOptions, simulate
+        from ..simulation import SolverOptions, solve
 
-        result = simulate(self.vehicle, params, track, SETTLE_S, speed,
-                          options=SolverOptions(integrator="imex"), contact_model=self.model)
+        # the traceable core under jit (not simulate()'s exported, cached programs: the
+        # programs traced above may hold host callbacks an export cannot carry)
+        result = eqx.filter_jit(solve)(self.vehicle, params, track, SETTLE_S, speed,
+                                       options=SolverOptions(integrator="imex"),
+                                       contact_model=self.model)
         if result.status != "successful":
             raise ValueError(f"steady curving at {speed:g} m/s: the settling run ended "
                              f"{result.status} at {float(result.simulated_time_s):.2f} s")

@@ -14,7 +14,6 @@ import pytest
 from jaxrail.profiles import uic60
 from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.stability import LinearStability
-from jaxrail.stability.linear import steady_motion
 from jaxrail.stability.wheelset import polach_slopes_along, wheelset_coefficients
 from jaxrail.multibody import velocities_from_twists
 from jaxrail.vehicles.loads import contact_loads
@@ -71,10 +70,10 @@ def _wickens(mass, yaw_inertia, spin_inertia, lateral_stiffness, yaw_stiffness, 
 
 
 def test_critical_speed_matches_wickens_model(wheelset, critical):
-    vehicle, params, _, coefficients = wheelset
+    vehicle, params, stability, coefficients = wheelset
     # the premise of the reference's creep slopes: the steady creepage is longitudinal
-    track = straight_track(200.0)
-    steady = steady_motion(vehicle, params, track, critical.speed)
+    track = stability.track
+    steady = stability._steady(params, jnp.asarray(critical.speed))
     forces = contact_loads(vehicle, params, track, steady.q, velocities_from_twists(
         steady.q, steady.velocity, steady.angular_velocity))[3]
     assert np.all(np.asarray(forces.creepage_x[0, :, 0]) != 0.0)
