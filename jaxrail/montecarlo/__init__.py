@@ -17,7 +17,7 @@ import numpy as np
 
 from .._ranges import within
 from ..scenarios import checks
-from ..vehicles.parameters import PARAMETERS, PROFILE_PARAMETERS, get_values
+from ..vehicles.parameters import PARAMETERS, check_contact_follows, get_values
 from .batch import run_chunks
 from .checkpoint import Checkpoint, study_key
 from .sampling import DESIGNS, Variation, check_names, draw, parse_variation
@@ -133,11 +133,7 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
     duration = scenario.duration if duration is None else float(duration)
     options = scenario.solver_options(duration=duration)
     names = tuple(k for k in samples if k in PARAMETERS)
-    fixed = [k for k in names if k in PROFILE_PARAMETERS]
-    if fixed and (scenario.contact if contact is None else contact) == "table":
-        raise ValueError(f"samples {fixed}: the contact table is built for one profile pair "
-                         f"at one gauge and does not follow them; vary them with the "
-                         f"paper's search (contact 'online')")
+    check_contact_follows(names, scenario.contact if contact is None else contact)
     speed = np.broadcast_to(np.asarray(samples.get("speed", scenario.speed), np.float64), (n,))
     shift = np.broadcast_to(np.asarray(samples.get("misalignment", scenario.misalignment),
                                        np.float64), (n,))

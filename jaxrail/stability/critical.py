@@ -23,9 +23,10 @@ import numpy as np
 from jax.flatten_util import ravel_pytree
 
 from ..vehicles.loads import resolve_contact_model
-from ..vehicles.parameters import PROFILE_PARAMETERS, get_values, parameter, set_values
+from ..vehicles.parameters import check_contact_follows, get_values, parameter, set_values
 from .curving import SteadyCurving
-from .linear import check_track, comoving_rhs, linear_system, modes, steady_motion
+from .linear import (check_track, comoving_rhs, is_one_arc, linear_system, modes,
+                     steady_motion)
 
 SPEED_TOLERANCE = 1e-7  # the root solve stops when a step moves the speed less (relative)
 MAX_ITERATIONS = 60
@@ -60,7 +61,7 @@ class LinearStability:
         # two programs: the steady motion (the rest pose's solve, or the steady curving
         # state's Newton iteration) and the matrices about it
         self.curving = None
-        if list(track.kinds) == ["arc"]:
+        if is_one_arc(track):
             self.curving = SteadyCurving(vehicle, params, track, model)
             self._steady = lambda params, speed: self.curving(speed, params).steady
         else:
@@ -142,11 +143,7 @@ class LinearStability:
         names = tuple(names)
         for name in names:
             parameter(name)
-        fixed = [name for name in names if name in PROFILE_PARAMETERS]
-        if fixed and getattr(self.model, "name", "") == "table":
-            raise ValueError(f"{fixed}: the contact table is built for one profile pair "
-                             f"at one gauge and does not follow them; take this gradient "
-                             f"with the paper's search (online)")
+        check_contact_follows(names, self.model.name)
         if self.curving is not None:
             raise ValueError("the critical speed's gradient is implemented on straight "
                              "track only (in a curve the steady curving state would need "

@@ -38,12 +38,12 @@ from ..multibody import quaternion as qt
 from ..track import to_track_coordinates, track_frame
 from ..vehicles.drive import ConstantForce
 from ..vehicles.loads import resolve_contact_model, vehicle_accelerations
-from .linear import SteadyMotion, perturbed_pose, steady_motion
+from .linear import SteadyMotion, is_one_arc, perturbed_pose, steady_motion
+from .nonlinear import driven_body
 
 MAX_ITERATIONS = 60
 STEP_TOLERANCE = 1e-11  # [m, rad]: Newton stops when a step moves every pose by less
 MAX_STEP = 1e-3  # [m, rad]: the largest move of a pose in one step (a trust region)
-FIRST_ITERATIONS = 60  # from the rest pose (or the last speed's state), before settling
 SPEED_STEP = 5.0  # [m/s]: a state further from the last one solved is reached in steps
 SETTLE_S = 3.0  # [s] simulated from the rest pose when Newton's method does not converge
 SINGULAR = 1e-10  # relative singular value below which a direction is left alone
@@ -62,15 +62,15 @@ def curve_frame(track, speed):
 
 
 def held_body(vehicle) -> int:
-    """The body the tangential force acts on: the carbody, else the frame, else the
-    first wheelset."""
-    for name in ("carbody", "frame"):
-        if name in vehicle.system.body_names:
-            return vehicle.system.body_names.index(name)
-    return int(vehicle.wheelsets[0])
+    """The body the tangential force acts on: the speed drive's (the carbody, else the
+    frame), else the first wheelset."""
+    try:
+        return driven_body(vehicle)
+    except ValueError:
+        return int(vehicle.wheelsets[0])
 
 
-def check_curving_vehicle(vehicle, params) -> None:
+def check_curving_vehicle(vehicle) -> None:
     """ValueError for a vehicle whose joints to the ground do not turn with the curve:
     only a revolute joint about the vertical does (the suspended wheelset built with
     ``curve_radius``); a prismatic guide holds a straight path."""
@@ -103,11 +103,10 @@ def unknowns_of_state(q, qdot, base: SteadyMotion, wheelsets, centre, body):
     centre = np.asarray(centre)
     arm, home = bodies[body, :2] - centre[:2], rest[body, :2] - centre[:2]
     angle = np.arctan2(home[1], home[0]) - np.arctan2(arm[1], arm[0])
-    turn = np.asarray(qt.rotation_matrix(qt.from_axis_angle(np.array([0.0, 0.0, 1.0]),
-                                                            angle)))
+    turn_p = qt.from_axis_angle(jnp.array([0.0, 0.0, 1.0]), angle)
+    turn = np.asarray(qt.rotation_matrix(turn_p))
     position = centre + (bodies[:, :3] - centre) @ turn.T
-    p = np.asarray(jax.vmap(lambda a: qt.multiply(qt.from_axis_angle(
-        jnp.array([0.0, 0.0, 1.0]), angle), a))(jnp.asarray(bodies[:, 3:])))
+    p = np.asarray(jax.vmap(lambda a: qt.multiply(turn_p, a))(jnp.asarray(bodies[:, 3:])))
     conjugate = rest[:, 3:] * np.array([1.0, -1.0, -1.0, -1.0])
     relative = np.asarray(jax.vmap(qt.multiply)(jnp.asarray(p), jnp.asarray(conjugate)))
     theta = 2.0 * np.sign(relative[:, :1]) * relative[:, 1:]  # small rotation vectors
@@ -186,7 +185,7 @@ class SteadyCurving:
 
     def __init__(self, vehicle, params, track, model=None):
         _check_arc(track)
-        check_curving_vehicle(vehicle, params)
+        check_curving_vehicle(vehicle)
         self.vehicle, self.params, self.track = vehicle, params, track
         self.model = model = resolve_contact_model(model)
         body = held_body(vehicle)
@@ -226,12 +225,12 @@ class SteadyCurving:
         self._jacobian = eqx.filter_jit(jax.jacfwd(residual))
         self._report = eqx.filter_jit(report)
 
-    def _newton(self, u, params, track, setup_values, iterations=MAX_ITERATIONS):
+    def _newton(self, u, params, track, setup_values):
         """(u, residual, iterations) of Newton's method from ``u`` (module docstring)."""
         n = self.vehicle.system.n_bodies
         norm = lambda r: np.linalg.norm(r) if np.all(np.isfinite(r)) else np.inf  # noqa: E731
         r = np.asarray(self._residual(u, params, track, setup_values))
-        for iteration in range(1, iterations + 1):
+        for iteration in range(1, MAX_ITERATIONS + 1):
             jacobian = np.asarray(self._jacobian(u, params, track, setup_values))
             step = newton_step(jacobian, r)
             moves = np.max(np.abs(step[:6 * n]))
@@ -281,7 +280,7 @@ class SteadyCurving:
             # the last speed's poses and tangential force, the spins of this speed
             last = self._last[3]
             u = np.concatenate([last[:6 * n], u[6 * n:-1], last[-1:]])
-        u, r, iteration = self._newton(u, params, track, setup_values, FIRST_ITERATIONS)
+        u, r, iteration = self._newton(u, params, track, setup_values)
         if not np.max(np.abs(r[:6 * n])) < RESIDUAL_TOLERANCE:
             # settle by a simulation from the rest pose, then Newton from where it went
             q, qdot = self._settle(speed, params, track)
@@ -302,6 +301,6 @@ class SteadyCurving:
 
 
 def _check_arc(track) -> None:
-    if list(track.kinds) != ["arc"]:
+    if not is_one_arc(track):
         raise ValueError(f"the steady curving state needs a track of one arc "
                          f"(Track.from_segments([Arc(...)])), got {list(track.kinds)}")

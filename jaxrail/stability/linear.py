@@ -69,12 +69,18 @@ def check_ideal(track) -> None:
                          "(track.with_support(None))")
 
 
+def is_one_arc(track) -> bool:
+    """Whether ``track`` is one circular arc (where the steady motion is the steady
+    curving state)."""
+    return list(track.kinds) == ["arc"]
+
+
 def check_track(track) -> None:
     """ValueError unless ``track`` is ideal, rigid, and one straight or one circular arc
     (where the steady motion is a relative equilibrium)."""
     check_ideal(track)
     kinds = list(track.kinds)
-    if not (all(kind == "straight" for kind in kinds) or kinds == ["arc"]):
+    if not (all(kind == "straight" for kind in kinds) or is_one_arc(track)):
         raise ValueError(f"the stability analysis is implemented on straight track or on "
                          f"one circular arc (Track.from_segments([Arc(...)])): this track's "
                          f"segments are {kinds}")
@@ -169,9 +175,9 @@ def _joint_rows(vehicle, params, z, steady):
 
 def linear_system(vehicle, params, track, steady, model=None):
     """``(A, C)``: the state matrix (12 n, 12 n) of the co-moving perturbation of the
-    steady motion ``steady`` (:func:`steady_motion`, :func:`~jaxrail.stability.curving.
-    steady_curving`) and the
-    linearised joint constraints C (2 m, 12 n) (positions, then velocities).
+    steady motion ``steady`` (:func:`steady_motion`, or
+    :class:`~jaxrail.stability.curving.SteadyCurving`'s) and the linearised joint
+    constraints C (2 m, 12 n) (positions, then velocities).
     Traceable: jit, vmap and differentiate it."""
     model = resolve_contact_model(model)
     z0 = jnp.zeros(12 * vehicle.system.n_bodies)

@@ -157,6 +157,16 @@ PROFILE_PARAMETERS = ("track_gauge", "wheel_cone_angle")
 """The named parameters that change the wheel-rail geometry: a contact table, built for
 one profile pair at one gauge, does not follow them."""
 
+
+def check_contact_follows(names, contact: str) -> None:
+    """ValueError, before anything is built, for :data:`PROFILE_PARAMETERS` among
+    ``names`` with the ``contact`` mode ``"table"``."""
+    fixed = [name for name in names if name in PROFILE_PARAMETERS]
+    if fixed and contact == "table":
+        raise ValueError(f"{fixed}: the contact table is built for one profile pair at one "
+                         f"gauge and does not follow them; use the paper's search "
+                         f"(contact 'online')")
+
 _AXES = {"longitudinal": 0, "lateral": 1, "vertical": 2}
 PARAMETERS = {p.name: p for p in [
     _contact("stiffness_scale", "-", "factor on the Hertz contact stiffness (1 = Hertz)",
