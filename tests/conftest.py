@@ -20,16 +20,24 @@ jax.config.update("jax_enable_x64", True)
 # last while the other worker idles.
 _SLOWEST_FIRST = (
     "tests/vehicles/test_imex_trailer.py",
+    "tests/montecarlo/test_batch.py",
     "tests/contact/test_table.py",
     "tests/vehicles/test_irregular_track.py",
-    "tests/montecarlo/test_batch.py",
+    "tests/vehicles/test_flexible_track.py",
+    "tests/stability/test_curving.py",
+    "tests/stability/test_linear_stability.py",
     "tests/vehicles/test_trailer.py",
     "tests/montecarlo/test_distributed.py",
-    "tests/stability/test_linear_stability.py",
-    "tests/stability/test_curving.py",
     "tests/test_progress.py",
-    "tests/vehicles/test_klingel.py",
+    "tests/geometry/test_geometry.py",
+    "tests/multibody/test_lean_solve.py",
+    "tests/vehicles/test_parameters.py",
+    "tests/contact/test_search.py",
+    "tests/test_cli_identify.py",
+    "tests/contact/test_strip.py",
     "tests/montecarlo/test_resume.py",
+    "tests/multibody/test_imex.py",
+    "tests/vehicles/test_klingel.py",
 )
 
 

@@ -24,6 +24,10 @@ and Polach's law, which has no derivative at zero creepage, makes the first line
 models poor. Where Newton's method does not converge from there, the vehicle runs
 :data:`SETTLE_S` s round the arc from its rest pose (the time integration, IMEX) and
 Newton's method starts again from where it went, turned back about the curve's axis.
+Each solve after the first (same parameters and track) starts from the state solved at
+the nearest speed, through states :data:`SPEED_STEP` apart where that is further away
+(continuation in speed): the settling run cannot serve above the critical speed, where
+the vehicle hunts round the arc instead of settling.
 """
 
 import dataclasses
@@ -44,7 +48,7 @@ from .nonlinear import driven_body
 MAX_ITERATIONS = 60
 STEP_TOLERANCE = 1e-11  # [m, rad]: Newton stops when a step moves every pose by less
 MAX_STEP = 1e-3  # [m, rad]: the largest move of a pose in one step (a trust region)
-SPEED_STEP = 5.0  # [m/s]: a state further from the last one solved is reached in steps
+SPEED_STEP = 5.0  # [m/s]: a state further than this from every one solved is reached in steps
 SETTLE_S = 3.0  # [s] simulated from the rest pose when Newton's method does not converge
 SINGULAR = 1e-10  # relative singular value below which a direction is left alone
 RESIDUAL_TOLERANCE = 1e-6  # [m/s^2, rad/s^2] largest acceleration left at convergence
@@ -219,7 +223,9 @@ class SteadyCurving:
             lateral, yaw = jax.vmap(wheelset)(jnp.asarray(wheelsets))
             return SteadyMotion(q, velocity, omega, frame_rate, centre), lateral, yaw
 
-        self._last = None  # (params, track, speed, u) of the last state: the next start
+        # (params, track, {speed: u}): the states solved for these params and track; the
+        # one nearest in speed starts the next solve
+        self._solved = None
         self._setup = eqx.filter_jit(setup)
         self._residual = eqx.filter_jit(residual)
         self._jacobian = eqx.filter_jit(jax.jacfwd(residual))
@@ -273,13 +279,15 @@ class SteadyCurving:
         setup_values = self._setup(params, track, jnp.asarray(speed, jnp.float64))
         u = np.asarray(setup_values[3])
         n = self.vehicle.system.n_bodies
-        if self._last is not None and self._last[0] is params and self._last[1] is track:
-            previous = self._last[2]
-            if abs(speed - previous) > SPEED_STEP:  # continuation: through the speeds between
-                self(previous + np.sign(speed - previous) * SPEED_STEP, params, track)
-            # the last speed's poses and tangential force, the spins of this speed
-            last = self._last[3]
-            u = np.concatenate([last[:6 * n], u[6 * n:-1], last[-1:]])
+        if self._solved is not None and self._solved[0] is params and self._solved[1] is track:
+            solved = self._solved[2]
+            nearest = min(solved, key=lambda v: abs(v - speed))
+            if abs(speed - nearest) > SPEED_STEP:  # continuation: through the speeds between
+                nearest = nearest + np.sign(speed - nearest) * SPEED_STEP
+                self(nearest, params, track)
+            # the nearest speed's poses and tangential force, the spins of this speed
+            start = solved[nearest]
+            u = np.concatenate([start[:6 * n], u[6 * n:-1], start[-1:]])
         u, r, iteration = self._newton(u, params, track, setup_values)
         if not np.max(np.abs(r[:6 * n])) < RESIDUAL_TOLERANCE:
             # settle by a simulation from the rest pose, then Newton from where it went
@@ -294,7 +302,9 @@ class SteadyCurving:
                              f"acceleration of {largest:.3g} after {iteration} iterations "
                              f"(no steady curving state near the centred start: a flange "
                              f"climb, or a curve too tight for the speed?)")
-        self._last = (params, track, speed, u)
+        if self._solved is None or self._solved[0] is not params or self._solved[1] is not track:
+            self._solved = (params, track, {})
+        self._solved[2][speed] = u
         steady, lateral, yaw = self._report(u, track, setup_values)
         return CurvingState(steady, speed, float(u[-1]), np.asarray(lateral), np.asarray(yaw),
                             iteration, largest)
