@@ -282,7 +282,7 @@ class SteadyCurving:
         if self._solved is not None and self._solved[0] is params and self._solved[1] is track:
             solved = self._solved[2]
             nearest = min(solved, key=lambda v: abs(v - speed))
-            if abs(speed - nearest) > SPEED_STEP:  # continuation: through the speeds between
+            while abs(speed - nearest) > SPEED_STEP:  # continuation: through the speeds between
                 nearest = nearest + np.sign(speed - nearest) * SPEED_STEP
                 self(nearest, params, track)
             # the nearest speed's poses and tangential force, the spins of this speed

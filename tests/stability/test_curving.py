@@ -13,6 +13,8 @@ centre) with coned wheels (1:40) on UIC60 1:40, in left curves without cant.
 - A simulation started from the state stays in it (global coordinates, no turning
   frame)."""
 
+import types
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -128,3 +130,34 @@ def test_bad_inputs_are_named(curving):
         in_curve.critical_speed_gradient(None, ["primary_lateral_stiffness"])
     with pytest.raises(ValueError, match="curve_radius must be > 0"):
         suspended_wheelset(WHEEL, RAIL, curve_radius=-1.0)
+
+
+def test_each_solve_starts_from_the_state_solved_at_the_nearest_speed():
+    """The continuation's choice of start, on a stand-in problem whose state is its
+    speed (no vehicle is compiled): after 60, 70, ..., 140 m/s, the root solve's 90.64
+    m/s starts from 90 m/s (not from the last, 140), and 100 m/s asked with only 60 solved
+    goes through 65, ..., 95 m/s, each started from the one before."""
+    steady = SteadyCurving.__new__(SteadyCurving)
+    steady.vehicle = types.SimpleNamespace(system=types.SimpleNamespace(n_bodies=1),
+                                           wheelsets=())
+    steady.params, steady.track = object(), Track.from_segments([Arc(300.0, 3000.0)])
+    steady._solved = None
+    starts = []
+    steady._setup = lambda params, track, speed: (float(speed), None, None, np.zeros(7))
+
+    def newton(u, params, track, setup_values):
+        starts.append((setup_values[0], float(u[0])))
+        return np.r_[setup_values[0], np.zeros(6)], np.zeros(6), 1
+
+    steady._newton = newton
+    steady._report = lambda u, track, setup_values: (None, np.zeros(0), np.zeros(0))
+    for speed in range(60, 141, 10):
+        steady(speed)
+    del starts[:]
+    steady(90.64)
+    assert starts == [(90.64, 90.0)]
+    steady._solved = None
+    steady(60.0)
+    del starts[:]
+    steady(100.0)
+    assert starts == [(v, v - 5.0) for v in (65.0, 70.0, 75.0, 80.0, 85.0, 90.0, 95.0, 100.0)]
