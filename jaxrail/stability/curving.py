@@ -279,8 +279,10 @@ class SteadyCurving:
         setup_values = self._setup(params, track, jnp.asarray(speed, jnp.float64))
         u = np.asarray(setup_values[3])
         n = self.vehicle.system.n_bodies
-        if self._solved is not None and self._solved[0] is params and self._solved[1] is track:
-            solved = self._solved[2]
+        if self._solved is None or self._solved[0] is not params or self._solved[1] is not track:
+            self._solved = (params, track, {})
+        solved = self._solved[2]
+        if solved:
             nearest = min(solved, key=lambda v: abs(v - speed))
             while abs(speed - nearest) > SPEED_STEP:  # continuation: through the speeds between
                 nearest = nearest + np.sign(speed - nearest) * SPEED_STEP
@@ -302,9 +304,7 @@ class SteadyCurving:
                              f"acceleration of {largest:.3g} after {iteration} iterations "
                              f"(no steady curving state near the centred start: a flange "
                              f"climb, or a curve too tight for the speed?)")
-        if self._solved is None or self._solved[0] is not params or self._solved[1] is not track:
-            self._solved = (params, track, {})
-        self._solved[2][speed] = u
+        solved[speed] = u
         steady, lateral, yaw = self._report(u, track, setup_values)
         return CurvingState(steady, speed, float(u[-1]), np.asarray(lateral), np.asarray(yaw),
                             iteration, largest)

@@ -167,6 +167,7 @@ def check_contact_follows(names, contact: str) -> None:
                          f"gauge and does not follow them; use the paper's search "
                          f"(contact 'online')")
 
+
 _AXES = {"longitudinal": 0, "lateral": 1, "vertical": 2}
 PARAMETERS = {p.name: p for p in [
     _contact("stiffness_scale", "-", "factor on the Hertz contact stiffness (1 = Hertz)",

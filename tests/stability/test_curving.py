@@ -11,7 +11,9 @@ centre) with coned wheels (1:40) on UIC60 1:40, in left curves without cant.
   law scales both creep forces by C = sqrt((c11 xi)^2 + (c22 eta)^2) / |(xi, eta)|, so
   f11 and f22 are taken along the steady creepages' direction (fixed point).
 - A simulation started from the state stays in it (global coordinates, no turning
-  frame)."""
+  frame).
+- Each solve starts from the state solved at the nearest speed, through states 5 m/s
+  apart (a stand-in problem, nothing compiled)."""
 
 import types
 
