@@ -19,7 +19,7 @@ from .._ranges import within
 from ..scenarios import checks
 from ..vehicles.parameters import PARAMETERS, check_contact_follows, get_values
 from .batch import run_chunks
-from .checkpoint import Checkpoint, study_key
+from .checkpoint import Checkpoint, shared_rows, study_key
 from .sampling import DESIGNS, Variation, check_names, draw, parse_variation
 from .statistics import column_statistics, study_statistics, successful
 from .summary import sample_row
@@ -149,9 +149,10 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
     if checkpoint is not None:
         study = study_key(scenario, samples, duration, contact, chunk)
         saved = Checkpoint.open(checkpoint, study, n, overwrite)
-        for i, row in saved.rows.items():
-            rows[i] = row
-    if keep_results and saved is not None and saved.rows:
+    for i, row in shared_rows({} if saved is None else saved.rows).items():
+        rows[i] = row
+    done = np.array([row is not None for row in rows])
+    if keep_results and np.any(done):
         raise ValueError("keep_results needs every sample run in this call; a checkpoint "
                          f"{checkpoint} holds finished samples")
 
@@ -165,7 +166,6 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
         if keep_results:
             kept.append(result)
 
-    done = None if saved is None else np.array([row is not None for row in rows])
     model = scenario.contact_model(vehicle, params, contact, progress)
     compile_s, run_s, chunk = run_chunks((vehicle, params, track, model),
                                          (values, speed, shift, seed, scale), chunk, devices,

@@ -6,10 +6,16 @@ the scenario (every value it was read into), the samples drawn (so the seed, the
 design and the variations), the duration, the contact mode and the chunk size. A
 second run of the same study skips the chunks it finds finished; a different study
 refuses the file unless asked to overwrite it.
+
+On several processes (``jax.distributed``) only process 0 keeps the file;
+:func:`shared_rows` hands its finished rows to every process, so that all skip the same
+chunks (each chunk's gather is a collective that every process must join) and all
+hold the whole table.
 """
 
 import dataclasses
 import hashlib
+import itertools
 import json
 import math
 from pathlib import Path
@@ -19,6 +25,9 @@ import numpy as np
 from .._files import write_text
 
 FORMAT = "jaxrail montecarlo checkpoint 2"  # 2: the EN 14363 and EN 12299 columns
+PIECE_CHARACTERS = 1 << 20  # a key-value store's value stays well under gRPC's 4 MB
+SHARE_TIMEOUT_MS = 3600 * 1000
+_shares = itertools.count()  # the same sequence of calls on every process
 
 
 def study_key(scenario, samples: dict, duration, contact, chunk) -> str:
@@ -39,6 +48,44 @@ def _plain(value):
     if isinstance(value, (np.integer, int)) and not isinstance(value, bool):
         return int(value)
     return value
+
+
+def rows_to_json(rows: dict) -> dict:
+    """``{sample index: row}`` as JSON takes it (string keys, Python numbers)."""
+    return {str(k): {key: _plain(v) for key, v in row.items()} for k, row in sorted(rows.items())}
+
+
+def rows_from_json(data: dict) -> dict:
+    """The rows of :func:`rows_to_json` back (a NaN that JSON wrote as null is NaN)."""
+    return {int(k): {key: (math.nan if v is None else v) for key, v in row.items()}
+            for k, row in data.items()}
+
+
+def shared_rows(rows: dict, client=None, process=None) -> dict:
+    """Process 0's ``rows`` {sample index: row} on every process: with one process
+    ``rows`` itself, with several passed through ``client`` (default JAX's distributed
+    client: its coordination service's key-value store, in pieces of at most
+    ``PIECE_CHARACTERS``); ``process``: this process's index (default JAX's)."""
+    import jax
+
+    if client is None and jax.process_count() == 1:
+        return rows
+    if client is None:
+        from jax._src import distributed
+
+        client = distributed.global_state.client
+    key = f"jaxrail/montecarlo/rows/{next(_shares)}"
+    if (jax.process_index() if process is None else process) == 0:
+        text = json.dumps(rows_to_json(rows), allow_nan=True)
+        pieces = [text[i:i + PIECE_CHARACTERS] for i in range(0, len(text), PIECE_CHARACTERS)]
+        for i, piece in enumerate(pieces):
+            client.key_value_set(f"{key}/{i}", piece)
+        client.key_value_set(f"{key}/pieces", str(len(pieces)))
+        return rows
+    count = int(client.blocking_key_value_get(f"{key}/pieces", SHARE_TIMEOUT_MS))
+    text = "".join(client.blocking_key_value_get(f"{key}/{i}", SHARE_TIMEOUT_MS)
+                   for i in range(count))
+    return rows_from_json(json.loads(text))
 
 
 @dataclasses.dataclass
@@ -68,14 +115,11 @@ class Checkpoint:
             raise ValueError(f"{path}: holds the finished chunks of another study (the "
                              "scenario, samples, seed, variations, duration, contact mode or "
                              "chunk differ); remove it or pass --overwrite to start again")
-        rows = {int(k): {key: (math.nan if v is None else v) for key, v in row.items()}
-                for k, row in saved["rows"].items()}
-        return cls(path, study, samples, rows)
+        return cls(path, study, samples, rows_from_json(saved["rows"]))
 
     def add(self, rows: dict) -> None:
         """Keep ``rows`` {sample index: row} and write the file whole."""
         self.rows.update(rows)
         data = {"format": FORMAT, "study": self.study, "samples": self.samples,
-                "rows": {str(k): {key: _plain(v) for key, v in row.items()}
-                         for k, row in sorted(self.rows.items())}}
+                "rows": rows_to_json(self.rows)}
         write_text(self.path, json.dumps(data, allow_nan=True))

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from jaxrail.montecarlo import read_table
-from jaxrail.montecarlo.checkpoint import Checkpoint
+from jaxrail.montecarlo import checkpoint as checkpoints
+from jaxrail.montecarlo.checkpoint import Checkpoint, shared_rows
 
 SCENARIO = """
 name = "wheelset-irregular"
@@ -109,6 +110,44 @@ def test_another_study_refuses_the_checkpoint_unless_overwritten(tmp_path):
     path.write_text("not json")
     with pytest.raises(ValueError, match="not a jaxrail Monte Carlo checkpoint"):
         Checkpoint.open(path, "study-a", 4)
+
+
+class KeyValueStore:
+    """A stand-in for the coordination service's key-value store: a dict; a key read
+    before it is set is an error (the real store would wait for it)."""
+
+    def __init__(self):
+        self.values = {}
+
+    def key_value_set(self, key, value, allow_overwrite=False):
+        assert allow_overwrite or key not in self.values, f"{key} set twice"
+        self.values[key] = value
+
+    def blocking_key_value_get(self, key, timeout_in_ms):
+        return self.values[key]
+
+
+def test_process_0s_finished_rows_reach_every_process(monkeypatch):
+    """On several processes only process 0 opens the checkpoint; the others receive its
+    rows (in pieces, here of 100 characters), NaN and text included, so that all skip
+    the same chunks; a second share uses keys of its own."""
+    monkeypatch.setattr(checkpoints, "PIECE_CHARACTERS", 100)
+    store = KeyValueStore()
+    rows = {i: {"status": "successful", "steps": 10 + i, "max_normal_force_N": 1.5e4 + i,
+                "simulated_time_s": float("nan")} for i in (0, 1, 5)}
+    # the same call on each process: each draws the next share's number
+    monkeypatch.setattr(checkpoints, "_shares", iter([7, 7]))
+    assert shared_rows(rows, store, process=0) is rows
+    received = shared_rows({}, store, process=1)
+    assert int(store.values["jaxrail/montecarlo/rows/7/pieces"]) > 2
+    assert sorted(received) == [0, 1, 5]
+    for i in rows:
+        assert received[i]["status"] == "successful" and received[i]["steps"] == 10 + i
+        assert received[i]["max_normal_force_N"] == 1.5e4 + i
+        assert np.isnan(received[i]["simulated_time_s"])
+    monkeypatch.setattr(checkpoints, "_shares", iter([8, 8]))
+    shared_rows({}, store, process=0)
+    assert shared_rows({}, store, process=1) == {}
 
 
 @pytest.mark.parametrize("vary, message", [
