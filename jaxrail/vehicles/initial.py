@@ -87,42 +87,57 @@ def _residual(vehicle, inputs, pose):
     return forces - 0.5 * load, radius
 
 
+PROBES = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+# evaluations per roll: HEIGHT_BISECTIONS for the height, one for the wheels' balance
+PER_ROLL = HEIGHT_BISECTIONS + 1
+
+
 @functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
 def _rest_pose(vehicle, inputs):
     """(height, roll, radius) of :func:`wheelset_rest_pose` for ``inputs`` = (params,
-    track, s, lateral, speed, load, model)."""
+    track, s, lateral, speed, load, model).
+
+    The nested bisections and the Newton step's probes run as one loop with one
+    evaluation of the wheel loads per pass, so that the contact model is compiled once
+    (nested loops and a vmap compiled it three times): passes ``k`` of each block of
+    ``PER_ROLL`` bisect the height at the block's roll, the last one weighs the wheels
+    at that height and halves the roll's interval; the last five passes are the
+    probes."""
     load = inputs[5]
-    loads = lambda h, roll: _residual(vehicle, inputs, jnp.stack([h, roll]))[0] + 0.5 * load  # noqa: E731
+    r0 = inputs[0].nominal_radius
+    height_bounds = jnp.stack([0.5 * r0, 1.5 * r0])
+    rolls = ROLL_BISECTIONS * PER_ROLL
 
-    def height_for(roll):
-        """Bisection on the height at this roll for the total load."""
-        def bisect(_, bounds):
-            lo, hi = bounds
-            mid = 0.5 * (lo + hi)
-            heavy = jnp.sum(loads(mid, roll)) > load  # too deep: raise
-            return jnp.where(heavy, mid, lo), jnp.where(heavy, hi, mid)
-        r0 = inputs[0].nominal_radius
-        lo, hi = jax.lax.fori_loop(0, HEIGHT_BISECTIONS, bisect, (0.5 * r0, 1.5 * r0))
-        return 0.5 * (lo + hi)
-
-    def bisect_roll(_, state):
-        lo, hi, _, _ = state
-        mid = 0.5 * (lo + hi)
-        height = height_for(mid)
-        left, right = loads(height, mid)
+    def step(i, state):
+        roll_bounds, heights, pose, residuals, radii = state
+        k = i % PER_ROLL
+        probing = i >= rolls
+        weighing = (k == PER_ROLL - 1) & ~probing
+        roll = 0.5 * (roll_bounds[0] + roll_bounds[1])
+        height = 0.5 * (heights[0] + heights[1])
+        probe = jnp.asarray(PROBES)[jnp.clip(i - rolls, 0, len(PROBES) - 1)]
+        at = jnp.where(probing, pose + STEP * probe, jnp.stack([height, roll]))
+        residual, radius = _residual(vehicle, inputs, at)
+        left, right = residual + 0.5 * load
+        heavy = left + right > load  # too deep: raise
+        split = jnp.where(heavy, jnp.stack([height, heights[1]]), jnp.stack([heights[0], height]))
         more_left = left > right  # positive roll lifts the left wheel
-        return jnp.where(more_left, mid, lo), jnp.where(more_left, hi, mid), height, mid
+        halved = jnp.where(more_left, jnp.stack([roll, roll_bounds[1]]),
+                           jnp.stack([roll_bounds[0], roll]))
+        slot = jnp.arange(len(PROBES)) == i - rolls
+        return (jnp.where(weighing, halved, roll_bounds),
+                jnp.where(weighing, height_bounds, jnp.where(probing, heights, split)),
+                jnp.where(weighing, at, pose),
+                jnp.where(slot[:, None], residual, residuals),
+                jnp.where(slot, radius, radii))
 
     zero = jnp.zeros(())
-    *_, height, roll = jax.lax.fori_loop(0, ROLL_BISECTIONS, bisect_roll,
-                                         (zero - MAX_ROLL, zero + MAX_ROLL, zero, zero))
-    pose = jnp.stack([height, roll])
-    probes = pose + STEP * jnp.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0],
-                                      [0.0, -1.0]])
-    residual, radius = jax.vmap(lambda x: _residual(vehicle, inputs, x))(probes)
+    start = (jnp.stack([zero - MAX_ROLL, zero + MAX_ROLL]), height_bounds, jnp.zeros(2),
+             jnp.zeros((len(PROBES), 2)), jnp.zeros(len(PROBES)))
+    *_, pose, residual, radius = jax.lax.fori_loop(0, rolls + len(PROBES), step, start)
     central = lambda x: jnp.stack([x[1] - x[3], x[2] - x[4]], axis=-1) / (2.0 * STEP)  # noqa: E731
-    step = -jnp.linalg.solve(central(residual), residual[0])
-    return pose[0] + step[0], pose[1] + step[1], radius[0] + central(radius) @ step
+    newton = -jnp.linalg.solve(central(residual), residual[0])
+    return pose[0] + newton[0], pose[1] + newton[1], radius[0] + central(radius) @ newton
 
 
 @_rest_pose.defjvp
