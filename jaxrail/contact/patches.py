@@ -266,10 +266,23 @@ def secant_curvature(depth_fn, y, domain, span: float = SECANT_SPAN):
     junctions, so that sum changes the Hertz stiffness by up to a factor 2.5 as a contact
     point crosses one. The depth is continuously differentiable there, and its second
     difference over the span changes continuously, spreading the jump over 2 ``span``."""
+    points, span = secant_stencil(y, domain, span)
+    return stencil_curvature(jax.vmap(depth_fn)(points), span)
+
+
+def secant_stencil(y, domain, span: float = SECANT_SPAN):
+    """The three points [m] (3,) of :func:`secant_curvature` and the span [m] it uses
+    (shrunk on a narrow surface)."""
     half_width = 0.5 * (domain[1] - domain[0])
     span = jnp.minimum(span, 0.5 * half_width)
     centre = jnp.clip(y, domain[0] + span, domain[1] - span)
-    d_below, d_mid, d_above = jax.vmap(depth_fn)(centre + span * jnp.array([-1.0, 0.0, 1.0]))
+    return centre + span * jnp.array([-1.0, 0.0, 1.0]), span
+
+
+def stencil_curvature(depths, span):
+    """:func:`secant_curvature` from the depths [m] (3,) at :func:`secant_stencil`'s
+    points."""
+    d_below, d_mid, d_above = depths
     return -(d_above - 2.0 * d_mid + d_below) / span**2
 
 

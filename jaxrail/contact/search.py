@@ -22,8 +22,8 @@ from jaxtyping import Array, Bool, Float, Int
 from .._tracing import traced_once
 from ..profiles._base import Profile, WheelProfile
 from ..track.rails import lateral_from_centre, rail_under_wheel, wheel_origin
-from .patches import (SECANT_SPAN, find_patches, overlap_density, refine_maximum, secant_curvature,
-                      wide_point)
+from .patches import (SECANT_SPAN, find_patches, overlap_density, refine_maximum, secant_stencil,
+                      stencil_curvature, wide_point)
 from .strip import strip_point, wheel_frame
 
 PARTS = ("y_deepest", "centre", "breadth")  # of a patch's contact point (search_wheel_parts)
@@ -138,11 +138,13 @@ def _surface_patches(surface, surface_index, wheel, rail, geometry, config, slot
     centre, breadth, overlap = jax.vmap(lambda w, y: overlap_density(w, strips.depth, y_grid, y))(
         weights, y_star)
     y_contact, blend = wide_point(y_star, centre, breadth)
-    depth = keep * jax.vmap(depth_fn)(y_star)
     stretch = 1.0 + jax.vmap(surface.slope)(y_star) ** 2  # (arc length / wheel coordinate)^2
-    secant = jax.vmap(lambda y, k: secant_curvature(depth_fn, y, surface.domain, SECANT_SPAN / jnp.sqrt(k)))(
+    stencil, span = jax.vmap(lambda y, k: secant_stencil(y, surface.domain, SECANT_SPAN / jnp.sqrt(k)))(
         y_star, stretch)
-    narrow = secant / stretch
+    # the refined depth and the secant's three in one evaluation of the strip function
+    depths = jax.vmap(jax.vmap(depth_fn))(jnp.concatenate([y_star[:, None], stencil], axis=1))
+    depth = keep * depths[:, 0]
+    narrow = jax.vmap(stencil_curvature)(depths[:, 1:], span) / stretch
     _, _, rail_origin, rail_axes, side = geometry
     data = lambda *args: _contact_data(surface, surface_index, wheel, rail, point, *args,  # noqa: E731
                                        rail_origin, rail_axes, side)
