@@ -17,6 +17,7 @@ from .spline import _prefilter
 
 _CANDIDATE = 1.5e-4  # [m] a found slot deeper than -this is a patch (search: 1e-4)
 _LEVEL_TOLERANCE = 1.0e-7  # [m] on the deepest depth at each approach level (reported)
+FIRST_STEPS, NEXT_STEPS = 24, 10  # Newton steps to the first approach level, to each next
 
 
 def _pose_on_straight(track, rail_offset, radius, lateral, vertical, yaw, roll, side):
@@ -51,20 +52,31 @@ def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, le
     def residual(z, depth):
         return deepest_depth(wheel, rail, track, rail_offset, *pose(z), side, config) - depth
 
-    def height(depth, bracket, steps):
-        """Safeguarded Newton on the vertical position for ``depth`` in ``bracket`` (the
-        deepest depth falls monotonically as the wheel rises); returns the position and
-        the depth's residual [m]."""
-        def step(state, _):
-            z, lo, hi = state
-            f, df = jax.jvp(lambda v: residual(v, depth), (z,), (jnp.ones_like(z),))
-            lo, hi = jnp.where(f > 0.0, z, lo), jnp.where(f > 0.0, hi, z)
-            newton = z - f / jnp.where(df < -1e-3, df, -1e-3)
-            inside = (newton > lo) & (newton < hi)
-            return (jnp.where(inside, newton, 0.5 * (lo + hi)), lo, hi), None
-        lo, hi = bracket
-        (z, _, _), _ = jax.lax.scan(step, (0.5 * (lo + hi), lo, hi), None, length=steps)
-        return z, residual(z, depth)
+    depths = jnp.asarray(levels)
+    passes = _height_passes(len(levels))
+
+    def one_pass(state, i):
+        """One pass of the safeguarded Newton method on the vertical position for each
+        level's depth (the deepest depth falls monotonically as the wheel rises): a
+        level's first pass sets its bracket, each pass evaluates the depth once, its
+        last one only records the position and the depth's residual [m] there."""
+        z, lo, hi, heights, misses = state
+        level, starts, closes = passes[0][i], passes[1][i], passes[2][i]
+        depth = depths[level]
+        # deeper: lower than the last level's position, by at most ten times the extra depth
+        fresh = starts & (level > 0)
+        lo = jnp.where(fresh, z - 10.0 * (depth - depths[jnp.maximum(level - 1, 0)]), lo)
+        hi = jnp.where(fresh, z, hi)
+        z = jnp.where(starts, 0.5 * (lo + hi), z)
+        f, df = jax.jvp(lambda v: residual(v, depth), (z,), (jnp.ones_like(z),))
+        lo_next, hi_next = jnp.where(f > 0.0, z, lo), jnp.where(f > 0.0, hi, z)
+        newton = z - f / jnp.where(df < -1e-3, df, -1e-3)
+        inside = (newton > lo_next) & (newton < hi_next)
+        z_next = jnp.where(inside, newton, 0.5 * (lo_next + hi_next))
+        record = closes & (jnp.arange(len(levels)) == level)
+        return (jnp.where(closes, z, z_next), jnp.where(closes, lo, lo_next),
+                jnp.where(closes, hi, hi_next), jnp.where(record, z, heights),
+                jnp.where(record, f, misses)), None
 
     def slots(z):
         patches, parts = search_wheel_parts(wheel, rail, track, rail_offset, *pose(z), side, config)
@@ -86,17 +98,26 @@ def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, le
                                   patches.y_wheel[:, None]], axis=-1)
         return found, values
 
-    heights, misses = [], []
-    z, miss = height(levels[0], (-0.03, 0.03), 24)
-    for k, depth in enumerate(levels):
-        if k:  # deeper: lower, by at most ten times the extra depth
-            z, miss = height(depth, (z - 10.0 * (depth - levels[k - 1]), z), 10)
-        heights.append(jax.lax.stop_gradient(z))
-        misses.append(miss)
-    heights = jnp.stack(heights)
+    zero, empty = jnp.zeros(()), jnp.zeros(len(levels))
+    (_, _, _, heights, misses), _ = jax.lax.scan(
+        one_pass, (zero, zero - 0.03, zero + 0.03, empty, empty), jnp.arange(len(passes[0])))
+    heights = jax.lax.stop_gradient(heights)
     found, values = jax.vmap(level)(heights)
     depth = values[..., 0] - values[..., 1] * heights[:, None]
-    return found, values, depth, heights, jnp.max(jnp.abs(jnp.stack(misses)))
+    return found, values, depth, heights, jnp.max(jnp.abs(misses))
+
+
+def _height_passes(count):
+    """The passes of :func:`_node`'s height solve for ``count`` levels: each pass's
+    level, whether it starts the level and whether it closes it (int32, bool, bool
+    arrays). The first level takes ``FIRST_STEPS`` Newton steps from (-3 cm, 3 cm), each
+    further one ``NEXT_STEPS`` from the last level's position, then one closing pass."""
+    steps = [FIRST_STEPS] + [NEXT_STEPS] * (count - 1)
+    level = np.concatenate([np.full(n + 1, k) for k, n in enumerate(steps)])
+    first = np.concatenate([[0], np.cumsum([n + 1 for n in steps])[:-1]])
+    starts = np.isin(np.arange(len(level)), first)
+    closes = np.isin(np.arange(len(level)), first + np.asarray(steps))
+    return jnp.asarray(level, jnp.int32), jnp.asarray(starts), jnp.asarray(closes)
 
 
 # The build runs each node's search at every approach level, thousands of nodes: its
