@@ -147,11 +147,21 @@ def _rest_pose_jvp(vehicle, primals, tangents):
     (inputs,), (d_inputs,) = primals, tangents
     height, roll, radius = _rest_pose(vehicle, inputs)
     pose = jnp.stack([height, roll])
-    _, (d_residual, d_radius) = jax.jvp(lambda x: _residual(vehicle, x, pose), (inputs,),
-                                        (d_inputs,))
-    by_pose, radius_by_pose = jax.jacfwd(lambda p: _residual(vehicle, inputs, p))(pose)
+    # one linearisation for both derivatives (the contact model compiled once for them)
+    _, linear = jax.linearize(lambda x, p: _residual(vehicle, x, p), inputs, pose)
+    d_residual, d_radius = linear(d_inputs, jnp.zeros(2))
+    no_inputs = jax.tree.map(_zero_tangent, d_inputs)
+    by_pose, radius_by_pose = jax.vmap(lambda e: linear(no_inputs, e), out_axes=-1)(
+        jnp.eye(2))
     d_pose = -jnp.linalg.solve(by_pose, d_residual)
     return (height, roll, radius), (d_pose[0], d_pose[1], d_radius + radius_by_pose @ d_pose)
+
+
+def _zero_tangent(tangent):
+    """A zero of ``tangent``'s type (float0 stays float0: its leaf is not differentiable)."""
+    if tangent.dtype == jax.dtypes.float0:
+        return tangent
+    return jnp.zeros_like(tangent)
 
 
 def wheelset_load(vehicle: Vehicle, params: VehicleParams):
