@@ -21,6 +21,7 @@ them, and each host feeds the rows of the chunk that its own devices hold
 (docs/montecarlo.md has the commands).
 """
 
+import itertools
 import time
 import warnings
 
@@ -104,12 +105,13 @@ def _put(x, devices):
 
 
 BARRIER_TIMEOUT_S = 24 * 3600  # a chunk may run for hours; a dead host ends it sooner
+_gathers = itertools.count()  # the same sequence of gathers on every process
 
 
-def _host(tree, barrier):
+def _host(tree):
     """A (possibly multi-host) result as NumPy on every host. On several hosts they
-    first meet at the coordination service's barrier named ``barrier`` (unique per
-    call): the gather's first collective sets up Gloo and fails when a host comes more
+    first meet at a barrier of the coordination service (a new one per gather): the
+    gather's first collective sets up Gloo and fails when a host comes more
     than 30 s after another (compiling or integrating longer), a limit that
     ``--xla_cpu_collective_timeout_seconds`` does not change. JAX offers no public
     barrier that is not itself a collective, hence its distributed client."""
@@ -118,7 +120,8 @@ def _host(tree, barrier):
     from jax._src import distributed
     from jax.experimental import multihost_utils
 
-    distributed.global_state.client.wait_at_barrier(barrier, BARRIER_TIMEOUT_S * 1000)
+    distributed.global_state.client.wait_at_barrier(f"jaxrail-gather-{next(_gathers)}",
+                                                    BARRIER_TIMEOUT_S * 1000)
     return jax.tree.map(np.asarray, multihost_utils.process_allgather(tree, tiled=True))
 
 
@@ -171,7 +174,7 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
         t0 = time.perf_counter()
         result = jax.block_until_ready(compiled(*args, devices=devices, **static))
         run_s += time.perf_counter() - t0
-        host = jax.tree.map(lambda x: x[: stop - start], _host(result, f"jaxrail-chunk-{start}"))
+        host = jax.tree.map(lambda x: x[: stop - start], _host(result))
         if on_chunk is not None:
             on_chunk(start, stop, host)
         if bar is not None:
