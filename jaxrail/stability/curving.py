@@ -227,28 +227,31 @@ class SteadyCurving:
         # one nearest in speed starts the next solve
         self._solved = None
         self._setup = eqx.filter_jit(setup)
-        self._residual = eqx.filter_jit(residual)
-        self._jacobian = eqx.filter_jit(jax.jacfwd(residual))
+        # the residual and its Jacobian from one program (forward mode carries the
+        # value): a second program for the residual alone compiled the model again
+        self._linearised = eqx.filter_jit(jax.jacfwd(lambda *a: (residual(*a),) * 2,
+                                                     has_aux=True))
         self._report = eqx.filter_jit(report)
 
     def _newton(self, u, params, track, setup_values):
         """(u, residual, iterations) of Newton's method from ``u`` (module docstring)."""
         n = self.vehicle.system.n_bodies
         norm = lambda r: np.linalg.norm(r) if np.all(np.isfinite(r)) else np.inf  # noqa: E731
-        r = np.asarray(self._residual(u, params, track, setup_values))
+        linearised = lambda u: tuple(np.asarray(x) for x in self._linearised(  # noqa: E731
+            u, params, track, setup_values))
+        jacobian, r = linearised(u)
         for iteration in range(1, MAX_ITERATIONS + 1):
-            jacobian = np.asarray(self._jacobian(u, params, track, setup_values))
             step = newton_step(jacobian, r)
             moves = np.max(np.abs(step[:6 * n]))
             small = moves < STEP_TOLERANCE
             step = step * min(1.0, MAX_STEP / max(moves, 1e-300))
             # halve a step that makes the residual worse
             for _ in range(12):
-                r_trial = np.asarray(self._residual(u + step, params, track, setup_values))
+                jacobian_trial, r_trial = linearised(u + step)
                 if small or norm(r_trial) <= norm(r):
                     break
                 step = 0.5 * step
-            u, r = u + step, r_trial
+            u, r, jacobian = u + step, r_trial, jacobian_trial
             if small:
                 break
         return u, r, iteration
