@@ -21,7 +21,6 @@ them, and each host feeds the rows of the chunk that its own devices hold
 (docs/montecarlo.md has the commands).
 """
 
-import itertools
 import time
 import warnings
 
@@ -32,6 +31,7 @@ import numpy as np
 from jax.sharding import NamedSharding, PartitionSpec
 
 from .._devices import POOL_THREADS, devices_may_stall, pool_threads
+from . import coordination
 from ..vehicles.parameters import set_values
 from ..simulation import DerailmentLimits, SolverOptions, _compile, solve
 
@@ -105,7 +105,6 @@ def _put(x, devices):
 
 
 BARRIER_TIMEOUT_S = 24 * 3600  # a chunk may run for hours; a dead host ends it sooner
-_gathers = itertools.count()  # the same sequence of gathers on every process
 
 
 def _host(tree):
@@ -113,15 +112,14 @@ def _host(tree):
     first meet at a barrier of the coordination service (a new one per gather): the
     gather's first collective sets up Gloo and fails when a host comes more
     than 30 s after another (compiling or integrating longer), a limit that
-    ``--xla_cpu_collective_timeout_seconds`` does not change. JAX offers no public
-    barrier that is not itself a collective, hence its distributed client."""
+    ``--xla_cpu_collective_timeout_seconds`` does not change
+    (:mod:`jaxrail.montecarlo.coordination`)."""
     if jax.process_count() == 1:
         return jax.tree.map(np.asarray, tree)
-    from jax._src import distributed
     from jax.experimental import multihost_utils
 
-    distributed.global_state.client.wait_at_barrier(f"jaxrail-gather-{next(_gathers)}",
-                                                    BARRIER_TIMEOUT_S * 1000)
+    coordination.client().wait_at_barrier(coordination.next_key("gather"),
+                                          BARRIER_TIMEOUT_S * 1000)
     return jax.tree.map(np.asarray, multihost_utils.process_allgather(tree, tiled=True))
 
 

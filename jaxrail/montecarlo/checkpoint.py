@@ -15,7 +15,6 @@ hold the whole table.
 
 import dataclasses
 import hashlib
-import itertools
 import json
 import math
 from pathlib import Path
@@ -23,11 +22,11 @@ from pathlib import Path
 import numpy as np
 
 from .._files import write_text
+from . import coordination
 
 FORMAT = "jaxrail montecarlo checkpoint 2"  # 2: the EN 14363 and EN 12299 columns
 PIECE_CHARACTERS = 1 << 20  # a key-value store's value stays well under gRPC's 4 MB
 SHARE_TIMEOUT_MS = 3600 * 1000
-_shares = itertools.count()  # the same sequence of calls on every process
 
 
 def study_key(scenario, samples: dict, duration, contact, chunk) -> str:
@@ -64,17 +63,15 @@ def rows_from_json(data: dict) -> dict:
 def shared_rows(rows: dict, client=None, process=None) -> dict:
     """Process 0's ``rows`` {sample index: row} on every process: with one process
     ``rows`` itself, with several passed through ``client`` (default JAX's distributed
-    client: its coordination service's key-value store, in pieces of at most
+    client: its coordination service's key-value store,
+    :mod:`jaxrail.montecarlo.coordination`, in pieces of at most
     ``PIECE_CHARACTERS``); ``process``: this process's index (default JAX's)."""
     import jax
 
     if client is None and jax.process_count() == 1:
         return rows
-    if client is None:
-        from jax._src import distributed
-
-        client = distributed.global_state.client
-    key = f"jaxrail/montecarlo/rows/{next(_shares)}"
+    client = coordination.client() if client is None else client
+    key = coordination.next_key("montecarlo/rows")
     if (jax.process_index() if process is None else process) == 0:
         text = json.dumps(rows_to_json(rows), allow_nan=True)
         pieces = [text[i:i + PIECE_CHARACTERS] for i in range(0, len(text), PIECE_CHARACTERS)]

@@ -13,6 +13,7 @@ import pytest
 
 from jaxrail.montecarlo import read_table
 from jaxrail.montecarlo import checkpoint as checkpoints
+from jaxrail.montecarlo import coordination
 from jaxrail.montecarlo.checkpoint import Checkpoint, shared_rows
 
 SCENARIO = """
@@ -136,7 +137,7 @@ def test_process_0s_finished_rows_reach_every_process(monkeypatch):
     rows = {i: {"status": "successful", "steps": 10 + i, "max_normal_force_N": 1.5e4 + i,
                 "simulated_time_s": float("nan")} for i in (0, 1, 5)}
     # the same call on each process: each draws the next share's number
-    monkeypatch.setattr(checkpoints, "_shares", iter([7, 7]))
+    monkeypatch.setattr(coordination, "_calls", iter([7, 7]))
     assert shared_rows(rows, store, process=0) is rows
     received = shared_rows({}, store, process=1)
     assert int(store.values["jaxrail/montecarlo/rows/7/pieces"]) > 2
@@ -145,7 +146,7 @@ def test_process_0s_finished_rows_reach_every_process(monkeypatch):
         assert received[i]["status"] == "successful" and received[i]["steps"] == 10 + i
         assert received[i]["max_normal_force_N"] == 1.5e4 + i
         assert np.isnan(received[i]["simulated_time_s"])
-    monkeypatch.setattr(checkpoints, "_shares", iter([8, 8]))
+    monkeypatch.setattr(coordination, "_calls", iter([8, 8]))
     shared_rows({}, store, process=0)
     assert shared_rows({}, store, process=1) == {}
 
