@@ -58,23 +58,37 @@ class LinearStability:
         self.vehicle, self.params, self.track = vehicle, params, track
         self.model = resolve_contact_model(model)
         model = self.model
-        # two programs: the steady motion (the rest pose's solve, or the steady curving
-        # state's Newton iteration) and the matrices about it
+        # the steady motion and the matrices about it: on straight track one program (the
+        # rest pose's solve and the Jacobian; two programs compiled the model twice); in
+        # a curve the steady curving state's Newton iteration, then the matrices' program
         self.curving = None
+        system = lambda params, steady: linear_system(vehicle, params, track, steady,  # noqa: E731
+                                                      model)
         if is_one_arc(track):
             self.curving = SteadyCurving(vehicle, params, track, model)
-            self._steady = lambda params, speed: self.curving(speed, params).steady
+            matrices = eqx.filter_jit(system)
+
+            def about(params, speed):
+                steady = self.curving(speed, params).steady
+                return steady, *matrices(params, steady)
         else:
-            self._steady = eqx.filter_jit(
-                lambda params, speed: steady_motion(vehicle, params, track, speed, model))
-        self._system = eqx.filter_jit(
-            lambda params, steady: linear_system(vehicle, params, track, steady, model))
+            def motion_and_matrices(params, speed):
+                steady = steady_motion(vehicle, params, track, speed, model)
+                return steady, *system(params, steady)
+
+            about = eqx.filter_jit(motion_and_matrices)
+        self._about = about
         self._derivatives = {}
 
     def matrices(self, speed, params=None):
         """``(A, C)`` at ``speed`` [m/s] (:func:`~jaxrail.stability.linear.linear_system`)."""
+        return self.steady_and_matrices(speed, params)[1:]
+
+    def steady_and_matrices(self, speed, params=None):
+        """``(steady motion, A, C)`` at ``speed`` [m/s]: the
+        :class:`~jaxrail.stability.linear.SteadyMotion` the matrices are taken about."""
         params = self.params if params is None else params
-        return self._system(params, self._steady(params, jnp.asarray(speed, jnp.float64)))
+        return self._about(params, jnp.asarray(speed, jnp.float64))
 
     def modes(self, speed, params=None):
         """:class:`~jaxrail.stability.linear.Modes` at ``speed`` [m/s]."""
@@ -151,7 +165,7 @@ class LinearStability:
         params = self.params if params is None else params
         values = get_values(self.vehicle, params, names)
         x = jnp.concatenate([jnp.asarray([point.speed], jnp.float64), values])
-        steady = self._steady(params, x[0])
+        steady, a, c = self._about(params, x[0])
         flat_steady, unravel = ravel_pytree(steady)
         programs = self._derivatives.get(names)
         if programs is None:
@@ -173,7 +187,6 @@ class LinearStability:
             programs = (eqx.filter_jit(jax.jacfwd(product, argnums=(0, 1))),
                         eqx.filter_jit(jax.jacfwd(steady_of)))
             self._derivatives[names] = programs
-        a, c = self._system(params, steady)
         m = modes(self.vehicle, params, a, c)
         k = m.hunting()
         right = m.vectors[:, k]

@@ -73,7 +73,7 @@ def test_critical_speed_matches_wickens_model(wheelset, critical):
     vehicle, params, stability, coefficients = wheelset
     # the premise of the reference's creep slopes: the steady creepage is longitudinal
     track = stability.track
-    steady = stability._steady(params, jnp.asarray(critical.speed))
+    steady = stability.steady_and_matrices(critical.speed)[0]
     forces = contact_loads(vehicle, params, track, steady.q, velocities_from_twists(
         steady.q, steady.velocity, steady.angular_velocity))[3]
     assert np.all(np.asarray(forces.creepage_x[0, :, 0]) != 0.0)
