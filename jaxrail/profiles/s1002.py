@@ -130,7 +130,8 @@ def piecewise_derivatives_mm(s, joints_ascending, rows):
     in value and slope, so the choice does not matter."""
     poly = jnp.asarray(np.stack([r[0] for r in rows]), dtype=jnp.float64)
     arc = jnp.asarray(np.stack([r[1] for r in rows]), dtype=jnp.float64)
-    index = jnp.searchsorted(jnp.asarray(joints_ascending, dtype=jnp.float64), s)
+    # the count of joints below s (searchsorted's left side) without its while loop
+    index = jnp.sum(jnp.asarray(joints_ascending, dtype=jnp.float64) < s)
     coefficients, (weight, radius_sq, centre) = poly[index], arc[index]
     # Horner's scheme for the polynomial and its first two derivatives at once.
     value, first, second = coefficients[_DEGREE], 0.0, 0.0
