@@ -13,9 +13,47 @@ os.environ.setdefault("XLA_FLAGS", "--xla_backend_optimization_level=0 "
                                    "--xla_llvm_disable_expensive_passes=true")
 
 import jax  # noqa: E402
+import pytest  # noqa: E402
+
+import jaxrail._compiler  # noqa: E402
+import jaxrail.simulation  # noqa: E402
+from jaxrail.vehicles.initial import initial_state  # noqa: E402
 
 # Physics is float64 (docs/design.md §8); tests run with it on, as the CLI does.
 jax.config.update("jax_enable_x64", True)
+
+
+@pytest.fixture(scope="module")
+def integrations_at_level_1():
+    """For a module whose runs are long: the integrations jaxrail compiles
+    (jaxrail.simulation._compile's programs but the rest pose) at LLVM level 1 with its
+    full pass list, everything else at the suite's level 0. A free wheelset's 0.3 s
+    Tsit5 run takes 0.48 s at level 1 against 2.6 s at level 0, for 17.5 s to compile
+    instead of 13.9 s (IMEX: 0.5 s against 1.3 s, 21.8 s to compile against 14.7 s), so
+    it pays only where a module runs for many seconds (tests/vehicles/test_trailer.py:
+    the README's example, 1 s of the paper's curve, 15 s instead of 35 s)."""
+    level_0_options = jaxrail._compiler.compiler_options
+    compile_function = jaxrail.simulation.compile_function
+    integration = [False]
+
+    def options():
+        chosen = level_0_options()
+        if integration[0]:
+            chosen.update(xla_backend_optimization_level=1,
+                          xla_llvm_disable_expensive_passes=False)
+        return chosen
+
+    def compile_integrations_at_level_1(function, *args, **kwargs):
+        integration[0] = function is not initial_state
+        try:
+            return compile_function(function, *args, **kwargs)
+        finally:
+            integration[0] = False
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(jaxrail._compiler, "compiler_options", options)
+        patch.setattr(jaxrail.simulation, "compile_function", compile_integrations_at_level_1)
+        yield
 
 # The slowest test files (measured with --durations=0), collected first: pytest-xdist's
 # --dist loadfile hands files to the two workers in collection order, so these start at

@@ -65,10 +65,12 @@ def test_topology_is_the_papers_11_bodies():
 # The paper's example for its first second: the leading wheelset starts 27.6 m into the
 # track and runs 18.3 m, short of the transition at 50 m.
 SCENARIO, DURATION = "paper-curve", 1.0
+# its run and the README example's (the same program, run again) at LLVM level 1
+pytestmark = pytest.mark.usefixtures("integrations_at_level_1")
 
 
 @pytest.fixture(scope="module")
-def command_run(tmp_path_factory):
+def command_run(tmp_path_factory, integrations_at_level_1):
     """`jaxrail simulate` on the first second: (directory, exit code, results file read
     back, summary)."""
     where = tmp_path_factory.mktemp("paper-curve-start")
