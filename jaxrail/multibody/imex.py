@@ -36,6 +36,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._when import computed_when
 from .system import FixedLoads, acceleration_response, accelerations, project_state, rhs
 
 METHODS = {"KenCarp3": 3, "KenCarp4": 4, "KenCarp5": 5}
@@ -87,8 +88,12 @@ class StiffJacobian(eqx.Module):
         return b_q + hg * x_v, x_v
 
 
-def stiff_jacobian(system, params, t, q, qdot, external, states=None):
+def stiff_jacobian(system, params, t, q, qdot, external, states=None, jacobian=True):
     """(f(y) = (qdot, qddot), :class:`StiffJacobian`) at y = (q, qdot).
+
+    ``jacobian``: a bool, which may be traced: where it is False, J's entries are zeros,
+    not computed (``external.linearised`` gets it as its ``jacobian`` keyword), so that
+    a loop of stages of which only the first needs J evaluates the loads at one place.
 
     ``external.linearised(t, q, qdot)`` returns ``(forces, torques, bodies, blocks)``:
     the loads as ``external(t, q, qdot)`` does, the indices of the bodies with stiff
@@ -102,24 +107,30 @@ def stiff_jacobian(system, params, t, q, qdot, external, states=None):
     (7 + r)) and ``state_rows`` (k, r, 2 (7 + r)) the derivatives of each body's load
     and of its r states' accelerations by its (q, x, qdot, xdot); f and J are then those
     of the packed state (:func:`_pack`)."""
+    flag = {} if jacobian is True else dict(jacobian=jacobian)
     if states is None:
         if external is None or not hasattr(external, "linearised"):
             n7 = q.shape[0]
             empty = jnp.zeros((n7, 0), dtype=q.dtype)
             return rhs(t, (q, qdot), (system, params, external)), StiffJacobian((), empty, empty)
-        forces, torques, bodies, blocks = external.linearised(t, q, qdot)
+        forces, torques, bodies, blocks = external.linearised(t, q, qdot, **flag)
         state_rows = jnp.zeros(blocks.shape[:1] + (0, 14), dtype=q.dtype)
         f_states = None
     else:
         forces, torques, f_states, bodies, blocks, state_rows = external.linearised(
-            t, q, qdot, states)
+            t, q, qdot, states, **flag)
     qddot, _ = accelerations(system, params, t, q, qdot, FixedLoads(forces, torques))
     k, r = len(bodies), state_rows.shape[1]
     n7 = q.shape[0]
-    response = acceleration_response(system, params, q, qdot, bodies, blocks)  # (7n, k, m)
-    if r:  # a body's states respond to its own coordinates only
-        own = jnp.einsum("jl,jrm->jrlm", jnp.eye(k, dtype=q.dtype), state_rows)
-        response = jnp.concatenate([response, own.reshape(k * r, k, -1)], axis=0)
+
+    def response_of_loads():  # (7n + k r, k, m)
+        response = acceleration_response(system, params, q, qdot, bodies, blocks)
+        if r:  # a body's states respond to its own coordinates only
+            own = jnp.einsum("jl,jrm->jrlm", jnp.eye(k, dtype=q.dtype), state_rows)
+            response = jnp.concatenate([response, own.reshape(k * r, k, -1)], axis=0)
+        return response
+
+    response = computed_when(jacobian, response_of_loads)
     half = 7 + r
     columns = tuple([7 * b + i for i in range(7)] + [n7 + r * j + i for i in range(r)]
                     for j, b in enumerate(bodies))
@@ -221,27 +232,43 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         s = b.size
         h = t1 - t0
         hg = h * gamma
-        states = y0[2] if len(y0) == 3 else None
-        f0, jac = stiff_jacobian(system, params, t0, y0[0], y0[1], external, states)
         like, y0 = y0, _pack(y0)
-        vf = lambda t, y: _pack(terms.vf(t, _unpack(like, y), args))  # noqa: E731
-        factored = jac.factor(hg)
+
+        def evaluate(i, y):
+            """(f(y), J) at stage i: J (computed at the first stage only) at y0."""
+            y = _unpack(like, y)
+            f, jac = stiff_jacobian(system, params, t0 + c[i] * h, y[0], y[1], external,
+                                    y[2] if len(y) == 3 else None, jacobian=i == 0)
+            return _pack(f), jac
+
         # per stage i: rows i and s + i hold the explicit part f(Y_i) - J (Y_i - y0) and
-        # the implicit part J (Y_i - y0) (zero at the first stage), so that each stage's
-        # right-hand side is one weighted sum over both tableaus
-        parts = jax.tree.map(lambda x: jnp.zeros((2 * s,) + x.shape, x.dtype).at[0].set(x), f0)
+        # the implicit part J (Y_i - y0) (zero at the first stage, Y_0 = y0), so that each
+        # stage's right-hand side is one weighted sum over both tableaus. The first stage
+        # runs in the loop too, so that the loads are evaluated at one place in the
+        # program: it also gives J and the inverse of I - hg J, which the later stages use.
+        f_like, jac_like = jax.eval_shape(lambda y: evaluate(0, y), y0)
+        parts = jax.tree.map(lambda x: jnp.zeros((2 * s,) + x.shape, x.dtype), f_like)
+        zeros = lambda tree: jax.tree.map(lambda x: jnp.zeros(x.shape, x.dtype), tree)  # noqa: E731
+        jac = zeros(jac_like)
+        factored = zeros(jax.eval_shape(jac.factor, hg))  # the first stage's z is 0 with it
         rows = jnp.asarray(np.concatenate([a_e, a_i], axis=1))  # (s, 2 s)
         c = jnp.asarray(c)
 
-        def stage(i, parts):
+        def stage(i, carry):
+            parts, jac, factored = carry
             z = jac.solve(hg, factored, jax.tree.map(lambda d: h * d,
                                                      _weighted(rows[i], parts)))
-            f = vf(t0 + c[i] * h, jax.tree.map(jnp.add, y0, z))
+            f, jac_here = evaluate(i, jax.tree.map(jnp.add, y0, z))
+            first = i == 0
+            jac = jax.tree.map(lambda new, old: jnp.where(first, new, old), jac_here, jac)
+            factored = jax.lax.cond(first, lambda: jac.factor(hg), lambda: factored)
             stiff = jac.matvec(z)
-            return jax.tree.map(lambda stacked, x, w: stacked.at[i].set(x - w).at[s + i].set(w),
-                                parts, f, stiff)
+            parts = jax.tree.map(lambda stacked, x, w: stacked.at[i].set(x - w).at[s + i].set(w),
+                                 parts, f, stiff)
+            return parts, jac, factored
 
-        parts = jax.lax.fori_loop(1, s, stage, parts)
+        parts, jac, factored = jax.lax.fori_loop(0, s, stage, (parts, jac, factored))
+        f0 = jax.tree.map(lambda x: x[0], parts)
         both = lambda weights: jnp.asarray(np.concatenate([weights, weights]))  # noqa: E731
         y1 = jax.tree.map(lambda y, d: y + h * d, y0, _weighted(both(b), parts))
         # At about 1 ms Baumgarte's feedback (10 1/s) lets the joints drift by about

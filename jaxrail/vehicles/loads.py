@@ -28,6 +28,7 @@ from ..contact.table import ContactTable, table_patches
 from ..contact.table_cache import contact_table
 from ..multibody import accelerations
 from ..multibody import quaternion as qt
+from ..multibody._when import computed_when
 from ..multibody.forces import body_torque
 from ..track import track_frame
 from .vehicle import Vehicle, VehicleParams, wheelset_states
@@ -249,10 +250,12 @@ class VehicleLoads(eqx.Module):
         return (self._driven(t, qdot, forces), torques,
                 _rails_rate(self.track, rails, patches, patch_forces))
 
-    def linearised(self, t, q, qdot, rails=None):
+    def linearised(self, t, q, qdot, rails=None, jacobian=True):
         """``(forces, torques, bodies, blocks)``: the loads of ``__call__``, the
         wheelset body indices and each wheelset's load Jacobian (W, 7, 14)
-        (:func:`wheelset_load_jacobian`), from one contact evaluation.
+        (:func:`wheelset_load_jacobian`), from one contact evaluation. ``jacobian``: a
+        bool, which may be traced (:func:`~jaxrail.multibody.imex.stiff_jacobian`):
+        where it is False the blocks are zeros, not computed.
 
         On a flexible track, with the rails at ``rails = (w, wdot)`` (W, 2, 2):
         ``(forces, torques, rails_dot, bodies, blocks, rail_rows)``, with the rails'
@@ -268,12 +271,13 @@ class VehicleLoads(eqx.Module):
         bodies = q.reshape(-1, 7)[index], qdot.reshape(-1, 7)[index], torques[index]
         contact = self.params.contact
         if rails is None:
-            blocks = jax.vmap(lambda x, a, b, m: wheelset_load_jacobian(contact, x, a, b, m))(
-                patches, *bodies)
+            blocks = computed_when(jacobian, lambda: jax.vmap(
+                lambda x, a, b, m: wheelset_load_jacobian(contact, x, a, b, m))(patches, *bodies))
             return forces, torques, self.vehicle.wheelsets, blocks
         axes = jax.vmap(lambda x: rail_axes(self.track, x))(patches)
-        blocks, on_rails = jax.vmap(lambda x, a, b, m, w, v, u: wheelset_load_jacobian(
-            contact, x, a, b, m, (w, v), u))(patches, *bodies, *rails, axes)
+        blocks, on_rails = computed_when(jacobian, lambda: jax.vmap(
+            lambda x, a, b, m, w, v, u: wheelset_load_jacobian(contact, x, a, b, m, (w, v), u))(
+                patches, *bodies, *rails, axes))
         support = self.track.support
         stiffness, damping, mass = (jnp.tile(x, 2) for x in (support.stiffness,
                                                              support.damping, support.mass))

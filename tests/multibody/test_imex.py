@@ -36,7 +36,7 @@ class Spring(eqx.Module):
 class StiffSpring(Spring):
     """The same force with its Jacobian for IMEX."""
 
-    def linearised(self, t, q, qdot):
+    def linearised(self, t, q, qdot, jacobian=True):  # computed whatever `jacobian` says
         forces, torques = self(t, q, qdot)
         block = jnp.zeros((1, 7, 14)).at[0, 0, 0].set(-MASS * self.k)
         return forces, torques, (0,), block.at[0, 0, 7].set(-MASS * self.c)
@@ -123,7 +123,7 @@ def test_stiff_jacobian_without_linearised_is_zero():
 class BrokenJacobian(StiffSpring):
     """The stiff spring with a Jacobian entry that is not finite."""
 
-    def linearised(self, t, q, qdot):
+    def linearised(self, t, q, qdot, jacobian=True):
         forces, torques, bodies, block = super().linearised(t, q, qdot)
         return forces, torques, bodies, block.at[0, 0, 0].set(jnp.nan)
 

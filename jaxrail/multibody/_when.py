@@ -1,0 +1,19 @@
+"""A part of a computation that only some evaluations need."""
+
+import jax
+import jax.numpy as jnp
+
+
+def computed_when(flag, function):
+    """``function()`` where ``flag`` holds, zeros of its shapes elsewhere.
+
+    ``flag``: a Python bool (then ``function`` is called or not, as written) or a traced
+    scalar bool (then one ``lax.cond``, so that a loop whose first iteration alone needs
+    the part holds it once and runs it once)."""
+    if flag is True:
+        return function()
+    zeros = lambda: jax.tree.map(lambda x: jnp.zeros(x.shape, x.dtype),  # noqa: E731
+                                 jax.eval_shape(function))
+    if flag is False:
+        return zeros()
+    return jax.lax.cond(flag, function, zeros)
