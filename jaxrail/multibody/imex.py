@@ -198,7 +198,8 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
     loads of ``external.linearised`` implicit, the rest explicit. ``method``: one of
     :data:`METHODS` (order 3, 4 or 5, with an embedded solution one order lower for
     the step-size controller). Output between steps by cubic Hermite interpolation.
-    The stages run in a loop, so the right-hand side is compiled once."""
+    The stages run in a loop, the first with the loads' Jacobian and the inverse of
+    I - h gamma J under a ``lax.cond``, so that the loads are compiled at one place."""
 
     method: str = eqx.field(static=True, default="KenCarp5")
 
