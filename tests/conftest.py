@@ -16,6 +16,7 @@ import jax  # noqa: E402
 import pytest  # noqa: E402
 
 import jaxrail._compiler  # noqa: E402
+from jaxrail._lru import LruCache  # noqa: E402
 import jaxrail.simulation  # noqa: E402
 from jaxrail.vehicles.initial import initial_state  # noqa: E402
 
@@ -53,6 +54,10 @@ def integrations_at_level_1():
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(jaxrail._compiler, "compiler_options", options)
         patch.setattr(jaxrail.simulation, "compile_function", compile_integrations_at_level_1)
+        # the module's programs in a cache of their own, dropped after it: the process's
+        # cache is keyed without the compiler options, and later modules run level 0
+        patch.setattr(jaxrail.simulation, "_compiled",
+                      LruCache(jaxrail.simulation.PROGRAMS_KEPT))
         yield
 
 # The slowest test files (measured with --durations=0), collected first: pytest-xdist's

@@ -92,8 +92,10 @@ def stiff_jacobian(system, params, t, q, qdot, external, states=None, jacobian=T
     """(f(y) = (qdot, qddot), :class:`StiffJacobian`) at y = (q, qdot).
 
     ``jacobian``: a bool, which may be traced: where it is False, J's entries are zeros,
-    not computed (``external.linearised`` gets it as its ``jacobian`` keyword), so that
-    a loop of stages of which only the first needs J evaluates the loads at one place.
+    not computed, so that a loop of stages of which only the first needs J evaluates the
+    loads at one place (:class:`IMEX`). Other than the Python ``True``, it is passed on
+    as ``external.linearised(..., jacobian=...)``: an ``external`` used with
+    :class:`IMEX` takes that keyword (it may ignore it and return its blocks anyway).
 
     ``external.linearised(t, q, qdot)`` returns ``(forces, torques, bodies, blocks)``:
     the loads as ``external(t, q, qdot)`` does, the indices of the bodies with stiff
@@ -260,10 +262,12 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
             z = jac.solve(hg, factored, jax.tree.map(lambda d: h * d,
                                                      _weighted(rows[i], parts)))
             f, jac_here = evaluate(i, jax.tree.map(jnp.add, y0, z))
+            # J (Y_i - y0) with the J the stage came in with: zero at the first stage,
+            # whatever J it computes (a J that is not finite must not reach f0)
+            stiff = jac.matvec(z)
             first = i == 0
             jac = jax.tree.map(lambda new, old: jnp.where(first, new, old), jac_here, jac)
             factored = jax.lax.cond(first, lambda: jac.factor(hg), lambda: factored)
-            stiff = jac.matvec(z)
             parts = jax.tree.map(lambda stacked, x, w: stacked.at[i].set(x - w).at[s + i].set(w),
                                  parts, f, stiff)
             return parts, jac, factored

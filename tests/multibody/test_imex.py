@@ -146,6 +146,21 @@ def test_a_failed_factorisation_ends_the_run_with_its_result(controller):
     assert np.isfinite(np.asarray(healthy)).all()  # the same run with a finite Jacobian
 
 
+def test_a_failed_step_keeps_finite_outputs_before_it():
+    """The step whose Jacobian is not finite is kept as its start: the states saved up
+    to and within it (Hermite output from its start) stay finite, so that a run that
+    fails keeps its results so far."""
+    q0 = jnp.array([1.0, 0, 0, 1.0, 0, 0, 0])
+    sol = mb.simulate_system(BODY, BODY_PARAMS, q0, jnp.zeros(7), 1.0, dt0=1e-2,
+                             saveat=diffrax.SaveAt(ts=jnp.array([0.0, 0.005, 0.01])),
+                             solver=IMEX(),
+                             external=BrokenJacobian(jnp.asarray(1e4), jnp.asarray(2000.0)),
+                             stepsize_controller=diffrax.ConstantStepSize(), throw=False,
+                             max_steps=10)
+    assert sol.result == diffrax.RESULTS.singular
+    assert np.isfinite(np.asarray(sol.ys[0])).all() and np.isfinite(np.asarray(sol.ys[1])).all()
+
+
 @pytest.mark.parametrize("entry", [0.0, 1.0])
 def test_a_singular_step_matrix_is_not_factored_ok(entry):
     """I - hg J with a zero pivot (hg A_v = 1 on a one-column J) has no finite inverse;
