@@ -4,6 +4,12 @@ import jax
 import jax.numpy as jnp
 
 
+def zeros_of(shapes):
+    """Zeros (of each leaf's dtype) shaped as the pytree ``shapes`` (arrays or
+    ``jax.ShapeDtypeStruct``s, e.g. from ``jax.eval_shape``)."""
+    return jax.tree.map(lambda x: jnp.zeros(x.shape, x.dtype), shapes)
+
+
 def computed_when(flag, function):
     """``function()`` where ``flag`` holds, zeros of its shapes elsewhere.
 
@@ -12,8 +18,7 @@ def computed_when(flag, function):
     the part holds it once and runs it once)."""
     if flag is True:
         return function()
-    zeros = lambda: jax.tree.map(lambda x: jnp.zeros(x.shape, x.dtype),  # noqa: E731
-                                 jax.eval_shape(function))
+    zeros = lambda: zeros_of(jax.eval_shape(function))  # noqa: E731
     if flag is False:
         return zeros()
     return jax.lax.cond(flag, function, zeros)

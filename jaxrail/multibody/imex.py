@@ -36,7 +36,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._when import computed_when
+from ._when import computed_when, zeros_of
 from .system import FixedLoads, acceleration_response, accelerations, project_state, rhs
 
 METHODS = {"KenCarp3": 3, "KenCarp4": 4, "KenCarp5": 5}
@@ -251,9 +251,8 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         # program: it also gives J and the inverse of I - hg J, which the later stages use.
         f_like, jac_like = jax.eval_shape(lambda y: evaluate(0, y), y0)
         parts = jax.tree.map(lambda x: jnp.zeros((2 * s,) + x.shape, x.dtype), f_like)
-        zeros = lambda tree: jax.tree.map(lambda x: jnp.zeros(x.shape, x.dtype), tree)  # noqa: E731
-        jac = zeros(jac_like)
-        factored = zeros(jax.eval_shape(jac.factor, hg))  # the first stage's z is 0 with it
+        jac = zeros_of(jac_like)
+        factored = zeros_of(jax.eval_shape(jac.factor, hg))  # the first stage's z is 0 with it
         rows = jnp.asarray(np.concatenate([a_e, a_i], axis=1))  # (s, 2 s)
         c = jnp.asarray(c)
 
