@@ -93,9 +93,9 @@ def stiff_jacobian(system, params, t, q, qdot, external, states=None, jacobian=T
 
     ``jacobian``: a bool, which may be traced: where it is False, J's entries are zeros,
     not computed, so that a loop of stages of which only the first needs J evaluates the
-    loads at one place (:class:`IMEX`). Other than the Python ``True``, it is passed on
-    as ``external.linearised(..., jacobian=...)``: an ``external`` used with
-    :class:`IMEX` takes that keyword (it may ignore it and return its blocks anyway).
+    loads at one place (:class:`IMEX`). It is passed on as
+    ``external.linearised(..., jacobian=...)``: an ``external`` takes that keyword (it
+    may ignore it and return its blocks anyway).
 
     ``external.linearised(t, q, qdot)`` returns ``(forces, torques, bodies, blocks)``:
     the loads as ``external(t, q, qdot)`` does, the indices of the bodies with stiff
@@ -109,18 +109,17 @@ def stiff_jacobian(system, params, t, q, qdot, external, states=None, jacobian=T
     (7 + r)) and ``state_rows`` (k, r, 2 (7 + r)) the derivatives of each body's load
     and of its r states' accelerations by its (q, x, qdot, xdot); f and J are then those
     of the packed state (:func:`_pack`)."""
-    flag = {} if jacobian is True else dict(jacobian=jacobian)
     if states is None:
         if external is None or not hasattr(external, "linearised"):
             n7 = q.shape[0]
             empty = jnp.zeros((n7, 0), dtype=q.dtype)
             return rhs(t, (q, qdot), (system, params, external)), StiffJacobian((), empty, empty)
-        forces, torques, bodies, blocks = external.linearised(t, q, qdot, **flag)
+        forces, torques, bodies, blocks = external.linearised(t, q, qdot, jacobian=jacobian)
         state_rows = jnp.zeros(blocks.shape[:1] + (0, 14), dtype=q.dtype)
         f_states = None
     else:
         forces, torques, f_states, bodies, blocks, state_rows = external.linearised(
-            t, q, qdot, states, **flag)
+            t, q, qdot, states, jacobian=jacobian)
     qddot, _ = accelerations(system, params, t, q, qdot, FixedLoads(forces, torques))
     k, r = len(bodies), state_rows.shape[1]
     n7 = q.shape[0]
