@@ -38,7 +38,8 @@ one with the whole vehicle shifted along the global y axis by 0-4 mm), per membe
 Prints one JSON object with an object per track support, each with one per model, and
 ``online_over_table`` and ``flexible_over_rigid`` (whole right-hand sides).
 Usage: ``python benchmarks/rhs_profile.py [--calls 40] [--scenario S] [--batch N]
-[--supports rigid flexible]``.
+[--supports rigid flexible] [--xla-defaults]`` (``--xla-defaults``: every program with
+XLA's default options instead of jaxrail's, e.g. on a jaxlib that does not know them).
 """
 
 import argparse
@@ -83,10 +84,14 @@ def _median_call_s(compiled, args, calls):
     return statistics.median(times)
 
 
+# jaxrail's compiler options, or none (``--xla-defaults``)
+_options = compiler_options
+
+
 def timed(function, args, calls):
     """(median run time [us], compile time [s]) of ``jax.jit(function)(*args)``."""
     start = time.perf_counter()
-    compiled = jax.jit(function).lower(*args).compile(compiler_options())
+    compiled = jax.jit(function).lower(*args).compile(_options())
     compile_s = time.perf_counter() - start
     return 1e6 * _median_call_s(compiled, args, calls), compile_s
 
@@ -94,7 +99,7 @@ def timed(function, args, calls):
 def compiled_loop(function, args, repeats=LOOP_REPEATS, options=None):
     """``function(q, qdot, data)`` evaluated ``repeats`` times in a compiled loop, as the
     integrator runs it, compiled for ``args`` with jaxrail's compiler options
-    (:mod:`jaxrail._compiler`) or ``options``; the loop returns the sum of all outputs.
+    (:mod:`jaxrail._compiler`; none with ``--xla-defaults``) or ``options``; the loop returns the sum of all outputs.
 
     Each evaluation sees the state moved by a tiny multiple of the previous outputs,
     so that nothing is hoisted out of the loop.
@@ -107,7 +112,7 @@ def compiled_loop(function, args, repeats=LOOP_REPEATS, options=None):
             return carry + sum(jnp.sum(leaf) for leaf in jax.tree_util.tree_leaves(out))
         return jax.lax.fori_loop(0, repeats, body, jnp.zeros(()))
 
-    options = compiler_options() if options is None else options
+    options = _options() if options is None else options
     return jax.jit(loop).lower(*args).compile(options)
 
 
@@ -212,7 +217,13 @@ def main():
     parser.add_argument("--batch", type=int, default=0, help="members of a vmapped batch")
     parser.add_argument("--supports", nargs="+", default=["rigid", "flexible"],
                         choices=("rigid", "flexible"))
+    parser.add_argument("--xla-defaults", action="store_true",
+                        help="compile every part with XLA's default options, none of "
+                             "jaxrail's (e.g. on a jaxlib that does not know them)")
     args = parser.parse_args()
+    if args.xla_defaults:
+        global _options
+        _options = dict
     scenario = load_scenario(args.scenario)
     vehicle, params, track = scenario.build()
     table, table_info = contact_table(params.wheel, params.rail, params.rail_offset,
@@ -239,7 +250,8 @@ def main():
     print(json.dumps({
         "benchmark": "rhs_profile", "scenario": scenario.name, "calls": args.calls,
         **results, "table": table, **ratios, "load": os.getloadavg(),
-        "jnp_dtype": str(jnp.zeros(1).dtype),
+        "jnp_dtype": str(jnp.zeros(1).dtype), "jax": jax.__version__,
+        "compiler_options": "xla defaults" if args.xla_defaults else "jaxrail",
     }, indent=2))
 
 
