@@ -99,7 +99,8 @@ def timed(function, args, calls):
 def compiled_loop(function, args, repeats=LOOP_REPEATS, options=None):
     """``function(q, qdot, data)`` evaluated ``repeats`` times in a compiled loop, as the
     integrator runs it, compiled for ``args`` with jaxrail's compiler options
-    (:mod:`jaxrail._compiler`; none with ``--xla-defaults``) or ``options``; the loop returns the sum of all outputs.
+    (:mod:`jaxrail._compiler`; none with ``--xla-defaults``) or ``options``; the loop
+    returns the sum of all outputs.
 
     Each evaluation sees the state moved by a tiny multiple of the previous outputs,
     so that nothing is hoisted out of the loop.
