@@ -23,37 +23,57 @@ import time
 from jaxrail._devices import host_device_environment
 
 
-def measure(scenario_name, samples, duration, seed, device_counts, sequential, contact):
+def study_inputs(scenario, samples, seed):
+    """The benchmarks' study: ``samples`` speeds at 80-120 % of the scenario's and
+    misalignments 0-4 mm, a Latin hypercube drawn with ``seed``."""
+    from jaxrail.montecarlo import draw, parse_variation
+
+    return draw([parse_variation(f"speed={0.8 * scenario.speed}:{1.2 * scenario.speed}"),
+                 parse_variation("misalignment=0:4e-3")], samples, seed=seed)
+
+
+def one_after_another(scenario, built, drawn, duration, contact, count=None):
+    """The first ``count`` (default all) samples of ``drawn``, one after another with the
+    unbatched ``solve`` compiled once: (compile [s], run [s], wheelset lateral
+    displacements (count, outputs, wheelsets) [m])."""
     import jax
     import numpy as np
+
+    from jaxrail.simulation import solve
+
+    vehicle, params, track = built
+    options = scenario.solver_options(duration=duration)
+    model = scenario.contact_model(vehicle, params, contact)
+    one = jax.jit(lambda v, m: solve(vehicle, params, track, duration, v, m,
+                                     options=options, contact_model=model))
+    start = time.perf_counter()
+    one = one.lower(drawn["speed"][0], drawn["misalignment"][0]).compile()
+    compile_s = time.perf_counter() - start
+    start = time.perf_counter()
+    lateral = []
+    for v, m in list(zip(drawn["speed"], drawn["misalignment"]))[:count]:
+        lateral.append(np.asarray(jax.block_until_ready(one(v, m)).wheelset_lateral))
+    return compile_s, time.perf_counter() - start, np.stack(lateral)
+
+
+def measure(scenario_name, samples, duration, seed, device_counts, sequential, contact):
+    import jax
 
     from jaxrail import enable_float64
 
     enable_float64()
-    from jaxrail.montecarlo import draw, parse_variation, run_samples
+    from jaxrail.montecarlo import run_samples
     from jaxrail.scenarios import load_scenario
-    from jaxrail.simulation import solve
 
     scenario = load_scenario(scenario_name)
     built = scenario.build()
-    vehicle, params, track = built
-    drawn = draw([parse_variation(f"speed={0.8 * scenario.speed}:{1.2 * scenario.speed}"),
-                  parse_variation("misalignment=0:4e-3")], samples, seed=seed)
-    options = scenario.solver_options(duration=duration)
-    model = scenario.contact_model(vehicle, params, contact)
+    drawn = study_inputs(scenario, samples, seed)
     report = {"host_devices": len(jax.devices()), "batches": []}
     if sequential:
-        one = jax.jit(lambda v, m: solve(vehicle, params, track, duration, v, m,
-                                         options=options, contact_model=model))
-        start = time.perf_counter()
-        one = one.lower(drawn["speed"][0], drawn["misalignment"][0]).compile()
-        report["sequential_compile_s"] = time.perf_counter() - start
-        start = time.perf_counter()
-        lateral = []
-        for v, m in zip(drawn["speed"], drawn["misalignment"]):
-            lateral.append(np.asarray(jax.block_until_ready(one(v, m)).wheelset_lateral))
-        report["sequential_run_s"] = time.perf_counter() - start
-        report["sequential_lateral"] = np.stack(lateral).tolist()
+        compile_s, run_s, lateral = one_after_another(scenario, built, drawn, duration,
+                                                      contact)
+        report |= {"sequential_compile_s": compile_s, "sequential_run_s": run_s,
+                   "sequential_lateral": lateral.tolist()}
     for k in device_counts:
         batch = run_samples(scenario, drawn, duration=duration, chunk=samples, built=built,
                             keep_results=True, devices=jax.devices()[:k], contact=contact)
