@@ -594,7 +594,8 @@ def build_parser():
                     help="sampling design (default: latin hypercube)")
     _seed_option(mc)
     mc.add_argument("--chunk", type=int, help="samples per compiled batch (default: "
-                                              "min(N, 64), rounded to the devices)")
+                                              "min(N, 64) on a CPU, min(N, 4096) on a "
+                                              "GPU, rounded to the devices)")
     _duration_option(mc)
     mc.add_argument("--out", action="append", help="write the table to this .csv or "
                                                    ".parquet file (repeat for both)")

@@ -123,10 +123,19 @@ def _host(tree):
     return jax.tree.map(np.asarray, multihost_utils.process_allgather(tree, tiled=True))
 
 
-def chunk_size(requested, n_samples, n_devices):
-    """The chunk actually used: ``requested`` (default: all samples, at most 64)
-    rounded up to a multiple of the number of devices."""
-    k = min(n_samples, 64) if requested is None else int(requested)
+DEFAULT_CHUNK = {"cpu": 64}  # samples per chunk by platform; DEFAULT_CHUNK_ELSEWHERE otherwise
+# On a GPU a batch's run time grows far slower than its size (an H200: 2.7 s for 256
+# members of bogie-curve-entry, 9.2 s for 4096, online), so chunks there are large
+# (docs/montecarlo.md, "On a GPU").
+DEFAULT_CHUNK_ELSEWHERE = 4096
+
+
+def chunk_size(requested, n_samples, n_devices, platform="cpu"):
+    """The chunk actually used: ``requested`` (default: all samples, at most 64 on a
+    CPU and 4096 on other platforms, :data:`DEFAULT_CHUNK`) rounded up to a multiple of
+    the number of devices."""
+    limit = DEFAULT_CHUNK.get(platform, DEFAULT_CHUNK_ELSEWHERE)
+    k = min(n_samples, limit) if requested is None else int(requested)
     if k < 1:
         raise ValueError(f"chunk must be >= 1, got {requested}")
     return -(-k // n_devices) * n_devices
@@ -152,7 +161,7 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
                       f"(or set {POOL_THREADS} to the cores plus the devices), see "
                       "docs/montecarlo.md", stacklevel=2)
     n = len(inputs[0])
-    chunk = chunk_size(chunk, n, len(devices))
+    chunk = chunk_size(chunk, n, len(devices), devices[0].platform)
     bar = None
     if progress:
         from tqdm.auto import tqdm

@@ -1,6 +1,7 @@
 """Host devices that run side by side: the environment, the refusal once JAX has
 started, the warning for devices that can take the whole thread pool, and a sharded
-loop of batched LAPACK solves that hangs in a pool of one thread per core."""
+loop of batched LAPACK solves that hangs in a pool of one thread per core; the
+default chunk per platform."""
 
 import os
 import subprocess
@@ -14,6 +15,7 @@ import pytest
 from jaxrail import use_host_devices
 from jaxrail._devices import (POOL_THREADS, SINGLE_THREADED_OPS, devices_may_stall,
                               host_device_environment, host_device_flags)
+from jaxrail.montecarlo.batch import chunk_size
 
 
 def test_flags_replace_an_earlier_count_and_keep_the_others():
@@ -32,6 +34,17 @@ def test_environment_gives_a_thread_per_core_and_per_device():
     assert env["XLA_FLAGS"].split()[0] == "--xla_cpu_enable_fast_math=false"
     assert env[POOL_THREADS] == str(os.cpu_count() + 3)
     assert POOL_THREADS not in host_device_environment(1, {})
+
+
+def test_default_chunk_is_larger_off_the_cpu():
+    assert chunk_size(None, 1000, 1) == 64
+    assert chunk_size(None, 1000, 1, "gpu") == 1000
+    assert chunk_size(None, 10_000, 1, "gpu") == 4096
+    assert chunk_size(None, 10, 1, "gpu") == 10
+    assert chunk_size(None, 1000, 3) == 66  # rounded up to the devices
+    assert chunk_size(100, 1000, 1, "gpu") == 100
+    with pytest.raises(ValueError, match="chunk must be >= 1"):
+        chunk_size(0, 1000, 1)
 
 
 def test_too_late_once_jax_has_started():
