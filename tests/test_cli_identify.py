@@ -2,21 +2,24 @@
 is written. (The fit itself runs in experiments/identify_contact: compiling the
 gradient of a simulation takes about 10 minutes, over the suite's budget.)"""
 
-import subprocess
-import sys
-
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jaxrail.cli import main
 from jaxrail.identification import Identification, Measurements, write_measurements
 from jaxrail.identification.fit import least_squares
 from jaxrail.plots.identification import plot_identification
 
 
-def run(*args):
-    return subprocess.run([sys.executable, "-m", "jaxrail.cli", "identify", *args],
-                          capture_output=True, text=True, timeout=300)
+def run(capfd, *args):
+    """``jaxrail identify ARGS`` in this process: (exit status, what it wrote to stderr)."""
+    capfd.readouterr()
+    try:
+        status = main(["identify", *args])
+    except SystemExit as stop:  # argparse's errors
+        status = stop.code
+    return status, capfd.readouterr().err
 
 
 @pytest.fixture
@@ -42,27 +45,27 @@ def measured(tmp_path):
     (("--fit", "friction", "--initial", "friction=0.9", "--bounds", "friction=0.1:0.5"),
      "the initial friction 0.9 lies outside its bounds [0.1, 0.5]"),
 ])
-def test_bad_arguments_are_named(measured, args, message):
-    done = run("bogie-curve-entry", "--measured", str(measured), *args)
-    assert done.returncode == 2
-    assert message in done.stderr
+def test_bad_arguments_are_named(measured, args, message, capfd):
+    status, err = run(capfd, "bogie-curve-entry", "--measured", str(measured), *args)
+    assert status == 2
+    assert message in err
 
 
-def test_measurements_longer_than_the_run_are_refused(tmp_path):
+def test_measurements_longer_than_the_run_are_refused(tmp_path, capfd):
     path = tmp_path / "long.csv"
     write_measurements(path, Measurements([0.0, 2.0], ("wheelset_lateral_1",),
                                           [[0.0], [0.0]], [1e-4]))
-    done = run("bogie-curve-entry", "--measured", str(path), "--fit", "friction")
-    assert done.returncode == 2 and "only 1.0 s" in done.stderr
+    status, err = run(capfd, "bogie-curve-entry", "--measured", str(path), "--fit", "friction")
+    assert status == 2 and "only 1.0 s" in err
 
 
-def test_measurements_too_dense_for_the_run_are_refused(tmp_path):
+def test_measurements_too_dense_for_the_run_are_refused(tmp_path, capfd):
     path = tmp_path / "dense.csv"  # two samples 1 ns apart: 8e9 output times over 1 s
     write_measurements(path, Measurements([0.0, 1e-9], ("wheelset_lateral_1",),
                                           [[0.0], [0.0]], [1e-4]))
-    done = run("bogie-curve-entry", "--measured", str(path), "--fit", "friction")
-    assert done.returncode == 2
-    assert "sampled every 1e-09 s need 8000000001 output times" in done.stderr
+    status, err = run(capfd, "bogie-curve-entry", "--measured", str(path), "--fit", "friction")
+    assert status == 2
+    assert "sampled every 1e-09 s need 8000000001 output times" in err
 
 
 def test_figure_of_a_fit(tmp_path):
