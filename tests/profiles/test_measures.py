@@ -1,5 +1,6 @@
 """Profile measures: UIC60 top, gauge point and rail position; wheel flange measures."""
 
+import functools
 import math
 
 import equinox as eqx
@@ -67,11 +68,14 @@ def _central_differences(values, steps):
                      for i, h in enumerate(steps)], axis=-1)
 
 
-XS = np.stack([_rows([float(r.inclination), 0.014, 1.435], STEPS) for r in RAILS])
-BASE = {}
-for key, (values, jac) in zip(KEYS, _rail_eval(RAILS, jnp.asarray(XS))):
-    BASE[key] = dict(values=np.asarray(values[0]), jac=np.asarray(jac[0]),
-                     rows=np.asarray(values), jac_rows=np.asarray(jac))
+@functools.cache
+def base():
+    """{key: values, Jacobian and their central-difference rows} of each rail, evaluated
+    once, when a test first asks (not while pytest collects the module)."""
+    xs = np.stack([_rows([float(r.inclination), 0.014, 1.435], STEPS) for r in RAILS])
+    return {key: dict(values=np.asarray(values[0]), jac=np.asarray(jac[0]),
+                      rows=np.asarray(values), jac_rows=np.asarray(jac))
+            for key, (values, jac) in zip(KEYS, _rail_eval(RAILS, jnp.asarray(xs)))}
 
 
 def _rotated(theta, p):
@@ -80,8 +84,8 @@ def _rotated(theta, p):
 
 
 def test_highest_points_against_reference():
-    y_top = {k: BASE[k]["values"][0] / MM for k in KEYS}
-    z_top = {k: BASE[k]["values"][1] / MM for k in KEYS}
+    y_top = {k: base()[k]["values"][0] / MM for k in KEYS}
+    z_top = {k: base()[k]["values"][1] / MM for k in KEYS}
     t40, t20 = math.atan(1 / 40), math.atan(1 / 20)
     # 1:40: on the R300 crown, at 300 sin(theta) on the field side (7.498 mm).
     assert y_top["1:40"] == pytest.approx(300.0 * math.sin(t40), abs=1e-9)
@@ -104,31 +108,31 @@ def _gauge_point_expected_mm(theta, z_top_mm):
 
 def test_rail_positions_against_reference():
     for key, theta in zip(KEYS, THETAS):
-        y_top, z_top, offset = BASE[key]["values"] / MM
+        y_top, z_top, offset = base()[key]["values"] / MM
         y_gauge, _ = _gauge_point_expected_mm(theta, z_top)
         assert offset == pytest.approx(717.5 - y_gauge, abs=2e-4), key
     # Highest point from the track centre (reference 2.1, CONTACT agrees for 1:40).
-    top = {k: (BASE[k]["values"][2] + BASE[k]["values"][0]) / MM for k in KEYS}
+    top = {k: (base()[k]["values"][2] + base()[k]["values"][0]) / MM for k in KEYS}
     assert top["1:40"] == pytest.approx(760.53, abs=0.01)
     assert top["1:20"] == pytest.approx(764.00, abs=0.01)
 
 
 def test_rail_measures_gradients_against_finite_differences():
     for key, theta in zip(KEYS, THETAS):
-        jac = BASE[key]["jac"]  # rows: y_top, z_top, offset; columns: theta, gh, gauge
-        assert np.all(np.isfinite(BASE[key]["jac_rows"])), key
-        fd = _central_differences(BASE[key]["rows"], STEPS)
+        jac = base()[key]["jac"]  # rows: y_top, z_top, offset; columns: theta, gh, gauge
+        assert np.all(np.isfinite(base()[key]["jac_rows"])), key
+        fd = _central_differences(base()[key]["rows"], STEPS)
         np.testing.assert_allclose(jac, fd, rtol=1e-6, atol=1e-9, err_msg=key)
         # Analytic: d offset/d gauge = 1/2; d offset/d gauge_height = 1/h'(y_gauge).
         assert jac[2, 2] == pytest.approx(0.5, rel=1e-12)
-        _, slope = _gauge_point_expected_mm(theta, BASE[key]["values"][1] / MM)
+        _, slope = _gauge_point_expected_mm(theta, base()[key]["values"][1] / MM)
         assert jac[2, 1] == pytest.approx(1.0 / slope, rel=1e-4), key
         assert jac[0, 1] == 0.0 and jac[0, 2] == 0.0  # the top ignores the gauge
     # Analytic top derivative: d(300 sin theta)/d theta on the crown (1:40), R80 (1:20).
     t40, t20 = math.atan(1 / 40), math.atan(1 / 20)
-    assert BASE["1:40"]["jac"][0, 0] == pytest.approx(0.3 * math.cos(t40), rel=1e-9)
+    assert base()["1:40"]["jac"][0, 0] == pytest.approx(0.3 * math.cos(t40), rel=1e-9)
     c80_rate = -C80[0] * math.sin(t20) - C80[1] * math.cos(t20)
-    assert BASE["1:20"]["jac"][0, 0] / MM == pytest.approx(c80_rate, rel=1e-5)
+    assert base()["1:20"]["jac"][0, 0] / MM == pytest.approx(c80_rate, rel=1e-5)
 
 
 _gauge_point = jax.jit(gauge_point)
@@ -136,7 +140,7 @@ _gauge_point = jax.jit(gauge_point)
 
 def test_gauge_point_and_its_domain_check():
     rail = RAILS[0]
-    y_top, z_top, offset = BASE["1:40"]["values"]
+    y_top, z_top, offset = base()["1:40"]["values"]
     y_gauge = float(_gauge_point(rail, 0.014))
     assert y_gauge == pytest.approx(0.7175 - offset, abs=1e-15)
     y_expect, _ = _gauge_point_expected_mm(math.atan(1 / 40), z_top / MM)
