@@ -2,12 +2,15 @@
 local processes (a local coordinator, one CPU device each) gives the table of the same
 samples run in one process, and only process 0 writes the files; process 1 comes to
 the gather of the results 40 s after process 0 (Gloo's set-up gives up after 30 s
-unless the processes first meet at the coordination service's barrier)."""
+unless the processes first meet at the coordination service's barrier). The
+one-process run starts while process 1 waits, on the core the two would leave idle."""
 
 import csv
+import os
 import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -21,9 +24,11 @@ def _free_port():
         return s.getsockname()[1]
 
 
-# `jaxrail` with the compile of the study's program made 40 s longer on process 1
+# `jaxrail` with the compile of the study's program made 40 s longer on process 1,
+# which first creates the file $LATE_MARK
 LATE = """
-import sys, time
+import os, sys, time
+from pathlib import Path
 import jax
 import jaxrail.montecarlo.batch as batch
 from jaxrail.cli import main
@@ -34,6 +39,7 @@ compile_program = batch._compile
 def late_compile(*args, **kwargs):
     out = compile_program(*args, **kwargs)
     if jax.process_index() == 1:
+        Path(os.environ["LATE_MARK"]).touch()
         time.sleep(40.0)
     return out
 
@@ -59,15 +65,20 @@ def test_two_processes_give_the_one_process_table(tmp_path):
     (tmp_path / "one").mkdir()
     (tmp_path / "two").mkdir()
     coordinator = f"localhost:{_free_port()}"
+    mark = tmp_path / "late"
     runs = [subprocess.Popen(_command(tmp_path / "two", "--distributed", "--coordinator",
                                       coordinator, "--num-processes", "2", "--process-id",
                                       str(k), program=("-c", LATE)),
+                             env=dict(os.environ, LATE_MARK=str(mark)),
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
             for k in (0, 1)]
-    runs.append(subprocess.Popen(_command(tmp_path / "one"),
-                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True))
     outputs = []
     try:
+        deadline = time.monotonic() + 600
+        while not mark.exists() and runs[1].poll() is None and time.monotonic() < deadline:
+            time.sleep(0.5)
+        runs.append(subprocess.Popen(_command(tmp_path / "one"), stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, text=True))
         for run in runs:
             outputs.append(run.communicate(timeout=600))
     finally:
