@@ -123,10 +123,11 @@ def _host(tree):
     return jax.tree.map(np.asarray, multihost_utils.process_allgather(tree, tiled=True))
 
 
-DEFAULT_CHUNK = {"cpu": 64}  # samples per chunk by platform
-# Elsewhere DEFAULT_CHUNK_ELSEWHERE. On a GPU a batch's run time grows far slower than its size (an H200: 2.7 s for 256
-# members of bogie-curve-entry, 9.2 s for 4096, online), so chunks there are large
+# Samples per chunk by platform, DEFAULT_CHUNK_ELSEWHERE on the others. On a GPU a
+# batch's run time grows far slower than its size (an H200: 2.7 s for 256 members of
+# bogie-curve-entry, 9.2 s for 4096, online), so chunks there are large
 # (docs/montecarlo.md, "On a GPU").
+DEFAULT_CHUNK = {"cpu": 64}
 DEFAULT_CHUNK_ELSEWHERE = 4096
 
 
