@@ -55,7 +55,8 @@ def test_measurements_longer_than_the_run_are_refused(tmp_path, capfd):
     path = tmp_path / "long.csv"
     write_measurements(path, Measurements([0.0, 2.0], ("wheelset_lateral_1",),
                                           [[0.0], [0.0]], [1e-4]))
-    status, err = run(capfd, "bogie-curve-entry", "--measured", str(path), "--fit", "friction")
+    status, err = run(capfd, "bogie-curve-entry", "--measured", str(path),
+                      "--fit", "friction")
     assert status == 2 and "only 1.0 s" in err
 
 
@@ -63,7 +64,8 @@ def test_measurements_too_dense_for_the_run_are_refused(tmp_path, capfd):
     path = tmp_path / "dense.csv"  # two samples 1 ns apart: 8e9 output times over 1 s
     write_measurements(path, Measurements([0.0, 1e-9], ("wheelset_lateral_1",),
                                           [[0.0], [0.0]], [1e-4]))
-    status, err = run(capfd, "bogie-curve-entry", "--measured", str(path), "--fit", "friction")
+    status, err = run(capfd, "bogie-curve-entry", "--measured", str(path),
+                      "--fit", "friction")
     assert status == 2
     assert "sampled every 1e-09 s need 8000000001 output times" in err
 
