@@ -13,8 +13,8 @@ and the first members' wheelset lateral displacements [m] (to compare devices).
 (the unbatched program compiled once) and reports the largest difference between
 their displacements and the batch's members' [m]. A count that would end past
 ``--budget`` seconds is skipped and says so; one that fails records its error and the
-next one runs. ``--out`` rewrites the JSON
-there, whole, after each count, so that a run cut short keeps what it measured.
+next one runs. ``--out`` rewrites the JSON there, whole, after each count, so that a
+run cut short keeps what it measured.
 """
 
 import argparse
@@ -26,17 +26,15 @@ import traceback
 
 from montecarlo import one_after_another, study_inputs
 
+from jaxrail._files import write_text
+
 FIRST_MEMBERS = 8  # members whose displacements the JSON keeps
 
 
 def write_whole(path, report):
-    """``report`` as JSON to ``path``, replacing it whole or not at all."""
-    if path is None:
-        return
-    partial = f"{path}.partial"
-    with open(partial, "w") as f:
-        json.dump(report, f, indent=1)
-    os.replace(partial, path)
+    """``report`` as JSON to ``path`` (if given), replacing it whole or not at all."""
+    if path is not None:
+        write_text(path, json.dumps(report, indent=1))
 
 
 def versions():
@@ -80,7 +78,8 @@ def main():
     scenario = load_scenario(args.scenario)
     t0 = time.perf_counter()
     built = scenario.build()
-    # the contact model (in table mode the table) is built once per process and cached
+    # the contact model built (in table mode the table, built or read) so that its cost
+    # is reported apart; each run below reads the table again from the disk cache
     scenario.contact_model(*built[:2], args.contact)
     report["build_s"] = time.perf_counter() - t0
     options = scenario.solver_options(duration=args.duration)
