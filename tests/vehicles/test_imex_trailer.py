@@ -73,6 +73,7 @@ def test_wheelset_load_jacobian_equals_brute_force_ad():
     np.testing.assert_allclose(fast, slow, rtol=1e-8, atol=1e-6 * float(jnp.max(jnp.abs(slow))))
 
 
+@pytest.mark.usefixtures("integrations_at_level_1")
 def test_imex_follows_tsit5_on_the_trailer(straight):
     scenario, vehicle, params, track = straight
     results = {}
