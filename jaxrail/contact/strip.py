@@ -27,6 +27,8 @@ from typing import NamedTuple
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
+from jax.custom_derivatives import SymbolicZero
 from jaxtyping import Array, Float
 
 from ..profiles._base import Profile
@@ -77,6 +79,24 @@ def longitudinal_offset(y, radius, slope, frame: WheelFrame, side) -> Float[Arra
     return side * (y + radius * slope) * frame.sin_alpha
 
 
+def _foot_newton(rail: Profile, eta, zeta, u):
+    """One safeguarded Newton step of eq. (15) from ``u`` [m], clipped to the rail
+    domain, and the foot residual ``g(u)`` [m] it started from (:func:`rail_foot`)."""
+    lo, hi = rail.domain
+    f, f1, f2 = rail.height_derivatives(u)
+    g = (eta - u) + (zeta - f) * f1
+    dg = -1.0 - f1 * f1 + (zeta - f) * f2
+    # On a convex head dg <= -1 near the foot; the floor guards far-away points.
+    dg = jnp.minimum(dg, -0.5)
+    return jnp.clip(u - g / dg, lo, hi), g
+
+
+def _stopped(*args):
+    """``args`` with every inexact array behind ``stop_gradient``."""
+    return jax.tree.map(lambda x: jax.lax.stop_gradient(x) if eqx.is_inexact_array(x) else x,
+                        args)
+
+
 def rail_foot(rail: Profile, eta, zeta, derivatives: bool = True
               ) -> tuple[Float[Array, ""], Float[Array, ""]]:
     """Eq. (15): the rail coordinate ``u`` whose normal passes through ``(eta, zeta)``.
@@ -89,34 +109,68 @@ def rail_foot(rail: Profile, eta, zeta, derivatives: bool = True
     residual converged (below 1e-9 m); elsewhere the depth has no meaning (a strip
     beside the rail, e.g. the back of the flange, is never in contact).
 
-    ``derivatives=False`` (static) gives ``u`` without derivatives: what a caller that
-    needs only the depth wants, since the distance along the normal is stationary in
-    ``u`` at the foot (:func:`signed_depth`).
+    The steps carry no derivatives; ``u``'s are the implicit function theorem's
+    (:func:`_foot`), exact to any order. ``derivatives=False`` (static): ``u`` without
+    derivatives, for a caller that differentiates only the depth
+    (:func:`depth_at_foot`).
     """
     lo, hi = rail.domain
-
-    def residual(rail, eta, zeta, u):
-        f, f1, f2 = rail.height_derivatives(u)
-        return (eta - u) + (zeta - f) * f1, f, f1, f2
-
-    def newton(rail, eta, zeta, u):
-        g, f, f1, f2 = residual(rail, eta, zeta, u)
-        dg = -1.0 - f1 * f1 + (zeta - f) * f2
-        # On a convex head dg <= -1 near the foot; the floor guards far-away points.
-        dg = jnp.minimum(dg, -0.5)
-        return jnp.clip(u - g / dg, lo, hi)
-
-    # All steps but the last without derivatives; the last, from the (stopped) converged
-    # foot, carries them: at a root its derivative is the implicit function theorem's,
-    # -g_theta / g_u, and the tangents cost one step instead of RAIL_NEWTON_STEPS.
-    fixed = jax.tree.map(lambda x: jax.lax.stop_gradient(x) if eqx.is_inexact_array(x) else x,
-                         (rail, eta, zeta))
-    u, _ = jax.lax.scan(lambda u, _: (newton(*fixed, u), None), jnp.clip(fixed[1], lo, hi),
-                        None, length=RAIL_NEWTON_STEPS - 1)
-    u = newton(*((rail, eta, zeta) if derivatives else fixed), jax.lax.stop_gradient(u))
-    converged = jnp.abs(residual(*fixed, jax.lax.stop_gradient(u))[0]) < 1e-9
+    fixed = _stopped(rail, eta, zeta)
+    # the last step is _foot's where u carries derivatives
+    u, _ = jax.lax.scan(lambda u, _: (_foot_newton(*fixed, u)[0], None),
+                        jnp.clip(fixed[1], lo, hi), None,
+                        length=RAIL_NEWTON_STEPS - (1 if derivatives else 0))
+    u = _foot(rail, eta, zeta, jax.lax.stop_gradient(u)) if derivatives else u
+    converged = jnp.abs(_foot_newton(*fixed, jax.lax.stop_gradient(u))[1]) < 1e-9
     valid = (eta > lo) & (eta < hi) & (u > lo) & (u < hi) & converged
     return u, jnp.where(valid, 1.0, 0.0)
+
+
+def _is_zero(tangent) -> bool:
+    return isinstance(tangent, SymbolicZero)
+
+
+def _dense(tangent):
+    """``tangent`` (a pytree) with its symbolic zero leaves as arrays of zeros."""
+    return jax.tree.map(lambda t: np.zeros(t.shape, t.dtype) if _is_zero(t) else t, tangent,
+                        is_leaf=_is_zero)
+
+
+def _at_the_foot(function):
+    """A custom-JVP function ``f(rail, eta, zeta, u)`` of the converged rail foot ``u``
+    (:func:`rail_foot`; its own tangent ignored) whose tangent is
+    ``function(rail, eta, zeta, v)``'s in ``(rail, eta, zeta)`` at a fixed ``v``:
+    ``v = u`` in value, but one Newton step from ``u`` in the inputs, so that the
+    rule, differentiated again, follows the foot and second derivatives are exact.
+    Its value is ``function(rail, eta, zeta, u)``. Inputs without a tangent (a profile
+    held fixed) cost nothing."""
+    wrapped = jax.custom_jvp(function)
+
+    def rule(primals, tangents):
+        rail, eta, zeta, u = primals
+        moving = _foot_newton(rail, eta, zeta, jax.lax.stop_gradient(u))[0]
+        live = [k for k in range(3)
+                if not all(map(_is_zero, jax.tree.leaves(tangents[k], is_leaf=_is_zero)))]
+
+        def at_moving(*moved):
+            inputs = list(primals[:3])
+            for k, x in zip(live, moved):
+                inputs[k] = x
+            return function(*inputs, moving)
+
+        value = function(rail, eta, zeta, u)
+        if not live:
+            return value, jnp.zeros_like(value)
+        return value, jax.jvp(at_moving, tuple(primals[k] for k in live),
+                              tuple(_dense(tangents[k]) for k in live))[1]
+
+    wrapped.defjvp(rule, symbolic_zeros=True)
+    return wrapped
+
+
+_foot = _at_the_foot(lambda rail, eta, zeta, u: _foot_newton(rail, eta, zeta, u)[0])
+"""``u`` [m] itself (the value of one more Newton step from the converged foot) with
+the implicit function theorem's derivatives, -g_theta / g_u."""
 
 
 def signed_depth(rail: Profile, u, eta, zeta) -> Float[Array, ""]:
@@ -125,10 +179,23 @@ def signed_depth(rail: Profile, u, eta, zeta) -> Float[Array, ""]:
 
     It is the distance to the rail's tangent line at ``u``, whose derivative in ``u`` is
     ``-f'' g(u) / (1 + f'^2)^(3/2)`` with ``g`` the foot residual of :func:`rail_foot`:
-    zero at the foot, so the depth's derivatives need none of ``u``."""
+    zero at the foot, so the depth's first derivatives need none of ``u``
+    (:func:`depth_at_foot`)."""
     f, f1, _ = rail.height_derivatives(u)
     gap = (zeta - f) - (eta - u) * f1
     return -gap / jnp.sqrt(1.0 + f1 * f1)
+
+
+def _depth_at(rail, eta, zeta, u):
+    return signed_depth(rail, u, eta, zeta)
+
+
+depth_at_foot = _at_the_foot(_depth_at)
+"""``depth_at_foot(rail, eta, zeta, u)``: :func:`signed_depth` [m] at the rail foot
+``u`` [m] of ``(eta, zeta)`` (:func:`rail_foot`), for a caller that differentiates the
+depth but not the foot. Its first derivative is that of the distance to the tangent
+line at a fixed ``u`` (stationary in ``u`` at the foot), which costs none of the foot's
+tangents; its second derivatives follow the foot (:func:`_at_the_foot`)."""
 
 
 def wheel_surface_point(surface: Profile, nominal_radius, y, wheel_origin: Float[Array, "3"],
@@ -170,12 +237,14 @@ def strip_point(
             (columns, global) at the rail section ``s_r``.
         side: +1.0 left wheel, -1.0 right wheel.
         foot_derivatives: False (static) where only the depth is differentiated: the
-            rail foot ``u_r`` then carries no derivatives (:func:`rail_foot`).
+            rail foot ``u_r`` then carries no derivatives and the depth is
+            :func:`depth_at_foot`'s.
     """
     point, s_w = wheel_surface_point(surface, nominal_radius, y, wheel_origin, frame, side)
     rel = point - rail_origin
     t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
     eta, zeta = side * (rel @ n), rel @ b
     u, inside = rail_foot(rail, eta, zeta, foot_derivatives)
-    depth = signed_depth(rail, u, eta, zeta)
+    depth = (signed_depth(rail, u, eta, zeta) if foot_derivatives
+             else depth_at_foot(rail, eta, zeta, u))
     return StripPoint(depth, s_w, rel @ t, u, point, inside)
