@@ -110,9 +110,9 @@ def rail_foot(rail: Profile, eta, zeta, derivatives: bool = True
     beside the rail, e.g. the back of the flange, is never in contact).
 
     The steps carry no derivatives; ``u``'s are the implicit function theorem's
-    (:func:`_foot`), exact to any order. ``derivatives=False`` (static): ``u`` without
-    derivatives, for a caller that differentiates only the depth
-    (:func:`depth_at_foot`).
+    (:func:`_foot`), first and second derivatives exact. ``derivatives=False``
+    (static): ``u`` without derivatives, for a caller that differentiates only the
+    depth (:func:`depth_at_foot`).
     """
     lo, hi = rail.domain
     fixed = _stopped(rail, eta, zeta)
@@ -143,7 +143,7 @@ def _at_the_foot(function):
     ``v = u`` in value, but one Newton step from ``u`` in the inputs, so that the
     rule, differentiated again, follows the foot and second derivatives are exact.
     Its value is ``function(rail, eta, zeta, u)``. Inputs without a tangent (a profile
-    held fixed) cost nothing."""
+    held fixed) take no tangent computation."""
     wrapped = jax.custom_jvp(function)
 
     def rule(primals, tangents):
