@@ -120,7 +120,7 @@ def rail_foot(rail: Profile, eta, zeta, derivatives: bool = True
     u, _ = jax.lax.scan(lambda u, _: (_foot_newton(*fixed, u)[0], None),
                         jnp.clip(fixed[1], lo, hi), None,
                         length=RAIL_NEWTON_STEPS - (1 if derivatives else 0))
-    u = _foot(rail, eta, zeta, jax.lax.stop_gradient(u)) if derivatives else u
+    u = _foot(rail, eta, zeta, u) if derivatives else u  # the scan's u has no derivatives
     converged = jnp.abs(_foot_newton(*fixed, jax.lax.stop_gradient(u))[1]) < 1e-9
     valid = (eta > lo) & (eta < hi) & (u > lo) & (u < hi) & converged
     return u, jnp.where(valid, 1.0, 0.0)
@@ -148,9 +148,12 @@ def _at_the_foot(function):
 
     def rule(primals, tangents):
         rail, eta, zeta, u = primals
-        moving = _foot_newton(rail, eta, zeta, jax.lax.stop_gradient(u))[0]
+        value = function(rail, eta, zeta, u)
         live = [k for k in range(3)
                 if not all(map(_is_zero, jax.tree.leaves(tangents[k], is_leaf=_is_zero)))]
+        if not live:
+            return value, jnp.zeros_like(value)
+        moving = _foot_newton(rail, eta, zeta, jax.lax.stop_gradient(u))[0]
 
         def at_moving(*moved):
             inputs = list(primals[:3])
@@ -158,9 +161,6 @@ def _at_the_foot(function):
                 inputs[k] = x
             return function(*inputs, moving)
 
-        value = function(rail, eta, zeta, u)
-        if not live:
-            return value, jnp.zeros_like(value)
         return value, jax.jvp(at_moving, tuple(primals[k] for k in live),
                               tuple(_dense(tangents[k]) for k in live))[1]
 
