@@ -12,7 +12,8 @@ curve (trailer, S1002 on UIC60 1:40, table mode, IMEX, rigid rails) in a process
 its own:
 
 - ``today``: jaxrail as it is, XLA's default flags;
-- ``threshold``: the same with the threshold raised (the loop still holds LAPACK);
+- ``ynn-off``: ``today`` without YNNPACK's fusions (a per-program option);
+- ``threshold``: ``today`` with the threshold raised (the loop still holds LAPACK);
 - ``hoistable``: the loop's blockers removed (the solves in plain operations,
   ``benchmarks/_plain_linalg.py``; YNNPACK fusions off, a per-program option; no
   progress report), default flags;
@@ -36,7 +37,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-VARIANTS = ("today", "threshold", "hoistable", "hoisted")
+VARIANTS = ("today", "ynn-off", "threshold", "hoistable", "hoisted")
 THRESHOLD = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=10000000000"
 
 
@@ -72,6 +73,8 @@ def child(variant, duration, runs):
         jnp.linalg.inv, jnp.linalg.solve = plain.inv, plain.solve
         jaxrail._compiler._CPU_OPTIONS["xla_cpu_experimental_ynn_fusion_type"] = ""
         jaxrail._time_report.report_time = lambda t: None
+    if variant == "ynn-off":
+        jaxrail._compiler._CPU_OPTIONS["xla_cpu_experimental_ynn_fusion_type"] = ""
     scenario = load_scenario("paper-curve")
     first, *_ = run_scenario(scenario, duration, contact="table")
     walls = []
