@@ -106,8 +106,9 @@ def main():
     load = [os.getloadavg()[0]]
     rows = []
     for variant in args.variants:
-        out = subprocess.run([sys.executable, __file__, "--child", variant, "--duration",
-                              str(args.duration), "--runs", str(args.runs)], capture_output=True, text=True)
+        command = [sys.executable, __file__, "--child", variant, "--duration",
+                   str(args.duration), "--runs", str(args.runs)]
+        out = subprocess.run(command, capture_output=True, text=True)
         if out.returncode:
             rows.append({"variant": variant, "error": out.stderr[-2000:]})
             continue
