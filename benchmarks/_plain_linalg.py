@@ -2,8 +2,9 @@
 LAPACK routines jaxrail's integration loop calls (``jax.scipy.linalg.cho_factor`` and
 ``cho_solve``, ``jnp.linalg.inv`` and ``solve``), so that the loop holds no custom
 call and XLA may compile it into one kernel. Each is a ``fori_loop`` over the matrix's
-columns, one rank-one update or substitution per column. Values only: the benchmark
-does not differentiate.
+columns or rows (Cholesky: a matrix-vector product per column; substitution: a dot per
+row; Gauss-Jordan: a rank-one update per column). Values only: the benchmark does not
+differentiate.
 """
 
 import jax.numpy as jnp
@@ -43,12 +44,14 @@ def substitute(lower, b, transposed):
 
 
 def cho_factor(a, lower=False, **_):
+    """``(L, True)``: as ``jax.scipy.linalg.cho_factor``, always the lower factor."""
     return cholesky(a), True
 
 
 def cho_solve(factor, b, **_):
-    lower, _ = factor
-    return substitute(lower, substitute(lower, b, False), True)
+    """x with L L^T x = b, ``factor`` from :func:`cho_factor`."""
+    l_factor, _ = factor
+    return substitute(l_factor, substitute(l_factor, b, False), True)
 
 
 def inv(a):
@@ -72,4 +75,5 @@ def inv(a):
 
 
 def solve(a, b):
+    """x with a x = b, as ``inv(a) @ b``."""
     return inv(a) @ b

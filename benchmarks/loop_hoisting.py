@@ -22,12 +22,15 @@ its own:
 
 Prints JSON: per variant the compile time, the run times of ``--runs`` calls of the
 compiled run (after the first, which compiles), steps, µs per step (median and
-fastest), whether the integration loop became one kernel (the
-optimised program's entry computation holds no ``while``), and the largest difference
-of the wheelsets' lateral displacements from ``today`` [mm]; the ratios to ``today``
-and the load.
+fastest), whether the integration loop became one kernel (the largest optimised
+program's entry computation holds no ``while`` and calls a kernel XLA marked
+``xla_cpu_small_call``), the largest difference of the wheelsets' lateral displacements
+from ``today``'s over all output times [mm], the ratios to ``today`` and the load.
+The "hoistable" variants' rest pose solves with the plain operations too (they replace
+``jnp.linalg.solve`` everywhere); it runs once per run, outside the loop.
 
     python benchmarks/loop_hoisting.py [--duration 1] [--runs 5] [--variants today hoisted]
+    python benchmarks/loop_hoisting.py --toy   (the stage matrix's inverse in a small loop)
 """
 
 import argparse
@@ -56,13 +59,12 @@ def child(variant, duration, runs):
     import jaxrail._time_report
     from jaxrail.scenarios import load_scenario, run_scenario
 
-    entries = []  # (length, entry computation) of each compiled program
+    programs = []  # every compiled program, read after the runs (outside the timings)
     compile_lowered = stages.Lowered.compile
 
     def recording(self, *args, **kwargs):
         compiled = compile_lowered(self, *args, **kwargs)
-        text = compiled.as_text() or ""
-        entries.append((len(text), text[text.find("\nENTRY"):]))
+        programs.append(compiled)
         return compiled
 
     stages.Lowered.compile = recording
@@ -81,7 +83,8 @@ def child(variant, duration, runs):
     for _ in range(runs):
         second, *_ = run_scenario(scenario, duration, contact="table")
         walls.append(float(second.wall_time_s))
-    entry = max(entries)[1]
+    text = max((p.as_text() or "" for p in programs), key=len)  # the integration's
+    entry = text[text.find("\nENTRY"):]
     steps = int(second.accepted_steps) + int(second.rejected_steps)
     print(json.dumps({
         "variant": variant, "status": second.status,
@@ -93,27 +96,78 @@ def child(variant, duration, runs):
         "lateral": np.asarray(second.wheelset_lateral).tolist()}))
 
 
+def toy_child(runs):
+    """A loop of 1000 steps a <- a + 1e-3 a^-1 of a 28 x 28 matrix (the IMEX stage
+    matrix's size), with LAPACK's inverse and with the plain-operation one: median ms
+    of ``runs`` calls, and whether XLA made the loop one kernel."""
+    import statistics
+    import time
+
+    import jax
+    import jax.numpy as jnp
+    sys.path.insert(0, str(Path(__file__).parent))
+    import _plain_linalg as plain
+    jax.config.update("jax_enable_x64", True)
+    a = 3.0 * jnp.eye(28) + 0.01
+    out = {}
+    for name, inverse in (("lapack", jnp.linalg.inv), ("plain", plain.inv)):
+        loop = jax.jit(lambda a: jax.lax.fori_loop(0, 1000, lambda i, a: a + 1e-3 * inverse(a), a))
+        compiled = loop.lower(a).compile()
+        jax.block_until_ready(compiled(a))
+        times = []
+        for _ in range(runs):
+            start = time.perf_counter()
+            jax.block_until_ready(compiled(a))
+            times.append(1e3 * (time.perf_counter() - start))
+        text = compiled.as_text()
+        out[name] = {"ms": round(statistics.median(times), 2),
+                     "loop_in_one_kernel": " while(" not in text[text.find("\nENTRY"):]}
+    print(json.dumps(out))
+
+
+def toy(runs):
+    """:func:`toy_child` with XLA's default flags and with the threshold raised."""
+    result = {}
+    for name, flags in (("default", ""), ("threshold", THRESHOLD)):
+        env = dict(os.environ, XLA_FLAGS=(os.environ.get("XLA_FLAGS", "") + " " + flags).strip())
+        out = subprocess.run([sys.executable, __file__, "--toy-child", "--runs", str(runs)],
+                             capture_output=True, text=True, env=env, check=True)
+        result[name] = json.loads(out.stdout.splitlines()[-1])
+    print(json.dumps({"toy": "1000 inverses of a 28 x 28 matrix in a fori_loop",
+                      "flags": result, "load_1min": round(os.getloadavg()[0], 2)}, indent=1))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=1.0)
     parser.add_argument("--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS))
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--child", choices=VARIANTS)
+    parser.add_argument("--toy", action="store_true", help="the inverse in a small loop only")
+    parser.add_argument("--toy-child", action="store_true")
     args = parser.parse_args()
+    if args.runs < 1:
+        parser.error("--runs must be at least 1")
+    if args.toy_child:
+        return toy_child(args.runs)
+    if args.toy:
+        return toy(args.runs)
     if args.child:
         return child(args.child, args.duration, args.runs)
     import numpy as np
-    load = [os.getloadavg()[0]]
     rows = []
     for variant in args.variants:
         command = [sys.executable, __file__, "--child", variant, "--duration",
                    str(args.duration), "--runs", str(args.runs)]
+        load = round(os.getloadavg()[0], 2)
         out = subprocess.run(command, capture_output=True, text=True)
-        if out.returncode:
-            rows.append({"variant": variant, "error": out.stderr[-2000:]})
-            continue
-        rows.append(json.loads(out.stdout.splitlines()[-1]))
-        load.append(os.getloadavg()[0])
+        try:
+            row = json.loads(out.stdout.splitlines()[-1]) if out.returncode == 0 else None
+        except (IndexError, json.JSONDecodeError):
+            row = None
+        if row is None:
+            row = {"variant": variant, "error": (out.stderr or out.stdout)[-2000:]}
+        rows.append(dict(row, load_1min_before=load))
     laterals = {r["variant"]: np.asarray(r.pop("lateral")) for r in rows if "lateral" in r}
     base = next((r for r in rows if r["variant"] == "today" and "error" not in r), None)
     for r in rows:
@@ -125,7 +179,7 @@ def main():
             r["compile_vs_today"] = round(r["compile_s"] / base["compile_s"], 3)
     print(json.dumps({"scenario": "paper-curve", "contact": "table", "integrator": "IMEX",
                       "duration_s": args.duration, "variants": rows,
-                      "load_1min": [round(x, 2) for x in load]}, indent=1))
+                      "load_1min_after": round(os.getloadavg()[0], 2)}, indent=1))
 
 
 if __name__ == "__main__":
