@@ -24,14 +24,13 @@ its lowest point (``-b_w``) toward the wheel frame's forward axis ``n_w``.
 
 from typing import NamedTuple
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.custom_derivatives import SymbolicZero
 from jaxtyping import Array, Float
 
-from ..profiles._base import Profile
+from ..profiles._base import Profile, frozen
 
 RAIL_NEWTON_STEPS = 5
 
@@ -91,12 +90,6 @@ def _foot_newton(rail: Profile, eta, zeta, u):
     return jnp.clip(u - g / dg, lo, hi), g
 
 
-def _stopped(*args):
-    """``args`` with every inexact array behind ``stop_gradient``."""
-    return jax.tree.map(lambda x: jax.lax.stop_gradient(x) if eqx.is_inexact_array(x) else x,
-                        args)
-
-
 def rail_foot(rail: Profile, eta, zeta, derivatives: bool = True
               ) -> tuple[Float[Array, ""], Float[Array, ""]]:
     """Eq. (15): the rail coordinate ``u`` whose normal passes through ``(eta, zeta)``.
@@ -115,7 +108,7 @@ def rail_foot(rail: Profile, eta, zeta, derivatives: bool = True
     depth (:func:`depth_at_foot`).
     """
     lo, hi = rail.domain
-    fixed = _stopped(rail, eta, zeta)
+    fixed = frozen((rail, eta, zeta))
     # the last step is _foot's where u carries derivatives
     u, _ = jax.lax.scan(lambda u, _: (_foot_newton(*fixed, u)[0], None),
                         jnp.clip(fixed[1], lo, hi), None,

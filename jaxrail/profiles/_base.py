@@ -104,3 +104,11 @@ class WheelProfile(eqx.Module):
     def rolling_radius(self, y: Float[ArrayLike, ""], surface: int = 0) -> Float[Array, ""]:
         """Rolling radius [m] at lateral coordinate ``y`` [m] of surface ``surface``."""
         return self.nominal_radius + self.surfaces[surface].height(y)
+
+
+def frozen(tree):
+    """``tree`` (a profile, or a profile with the points it is evaluated at) with every
+    array leaf behind ``stop_gradient``: for the fixed-count searches on a profile whose
+    loops must trace no tangents (the measures' bisections, the rail foot's Newton
+    steps), before one last step with the real profile carries the derivatives."""
+    return jax.tree.map(lambda x: jax.lax.stop_gradient(x) if eqx.is_array(x) else x, tree)

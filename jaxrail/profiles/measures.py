@@ -15,17 +15,11 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from ._base import Profile
+from ._base import Profile, frozen
 
 GRID_POINTS = 257  # coarse search: 0.3 mm spacing on a rail head, 0.5 mm on a wheel
 BISECTION_STEPS = 52  # brackets of ~0.1 m shrink below 1e-16 m
 NEWTON_STEPS = 1  # after a converged bisection one step gives the exact gradient
-
-
-def _frozen(profile: Profile) -> Profile:
-    """The profile with every array leaf behind ``stop_gradient``."""
-    return jax.tree_util.tree_map(
-        lambda x: jax.lax.stop_gradient(x) if eqx.is_array(x) else x, profile)
 
 
 def _where_clip(y, lo, hi):
@@ -91,16 +85,16 @@ def _maximizer(g, dg, lo, hi, plateau: bool = False):
 
 def _level_crossing(profile: Profile, level, lo, hi):
     """``y`` in ``[lo, hi]`` where ``profile.height(y) == level`` (height monotone there)."""
-    frozen, frozen_level = _frozen(profile), jax.lax.stop_gradient(level)
-    y = _bisect(lambda y: frozen.height(y) - frozen_level, lo, hi)
+    fixed, fixed_level = frozen(profile), jax.lax.stop_gradient(level)
+    y = _bisect(lambda y: fixed.height(y) - fixed_level, lo, hi)
     return _newton(lambda y: profile.height(y) - level, profile.slope, y, lo, hi)
 
 
 def _top_location(profile: Profile):
     """Location [m] of the highest point (no gradient) and its search bracket. The
     height there still has the right gradient (envelope theorem: slope 0)."""
-    frozen = _frozen(profile)
-    return _maximizer(frozen.height, frozen.slope, *profile.domain)
+    fixed = frozen(profile)
+    return _maximizer(fixed.height, fixed.slope, *profile.domain)
 
 
 def highest_point(rail: Profile) -> tuple[Float[Array, ""], Float[Array, ""]]:
@@ -208,9 +202,9 @@ def flange_angle(wheel_surface: Profile) -> Float[Array, ""]:
     """Flange angle [rad]: the largest inclination ``atan(-d height/dy)`` of the active
     flank between the flange tip and the taping line (70 degrees for S1002)."""
     _check_datum(wheel_surface)
-    frozen = _frozen(wheel_surface)
-    y_tip, _ = _top_location(frozen)
-    y, _ = _maximizer(lambda y: -frozen.slope(y), lambda y: -frozen.second_derivative(y),
+    fixed = frozen(wheel_surface)
+    y_tip, _ = _top_location(fixed)
+    y, _ = _maximizer(lambda y: -fixed.slope(y), lambda y: -fixed.second_derivative(y),
                       y_tip, 0.0, plateau=True)
     # At an interior maximum the value's gradient needs no d y/d parameter (envelope).
     return jnp.arctan(-wheel_surface.slope(y))
