@@ -22,10 +22,10 @@ its own:
 
 Prints JSON: per variant the compile time, the run times of ``--runs`` calls of the
 compiled run (after the first, which compiles), steps, µs per step (median and
-fastest), whether the integration loop became one kernel (the largest optimised
-program's entry computation holds no ``while`` and calls a kernel XLA marked
-``xla_cpu_small_call``), the largest difference of the wheelsets' lateral displacements
-from ``today``'s over all output times [mm], the ratios to ``today`` and the load.
+fastest), whether the integration loop became one kernel (in the largest optimised
+program, :func:`_loop_in_one_kernel`), the largest difference of the wheelsets' lateral
+displacements from ``today``'s over all output times [mm], the ratios to ``today`` and
+the load.
 The "hoistable" variants' rest pose solves with the plain operations too (they replace
 ``jnp.linalg.solve`` everywhere); it runs once per run, outside the loop.
 
@@ -44,9 +44,21 @@ VARIANTS = ("today", "ynn-off", "threshold", "hoistable", "hoisted")
 THRESHOLD = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=10000000000"
 
 
+def _with_threshold():
+    """This process's ``XLA_FLAGS`` with the hoisting threshold raised."""
+    return (os.environ.get("XLA_FLAGS", "") + " " + THRESHOLD).strip()
+
+
+def _loop_in_one_kernel(text):
+    """Whether an optimised program's entry computation (``as_text()``) runs no ``while``
+    itself and calls a kernel XLA made of one (``xla_cpu_small_call``)."""
+    entry = text[text.find("\nENTRY"):]
+    return " while(" not in entry and "xla_cpu_small_call" in entry
+
+
 def child(variant, duration, runs):
     if variant in ("threshold", "hoisted"):
-        os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " " + THRESHOLD).strip()
+        os.environ["XLA_FLAGS"] = _with_threshold()
     os.environ["JAXRAIL_COMPILATION_CACHE"] = "off"
     import jax
     import jax.numpy as jnp
@@ -73,9 +85,8 @@ def child(variant, duration, runs):
         import _plain_linalg as plain
         jax.scipy.linalg.cho_factor, jax.scipy.linalg.cho_solve = plain.cho_factor, plain.cho_solve
         jnp.linalg.inv, jnp.linalg.solve = plain.inv, plain.solve
-        jaxrail._compiler._CPU_OPTIONS["xla_cpu_experimental_ynn_fusion_type"] = ""
         jaxrail._time_report.report_time = lambda t: None
-    if variant == "ynn-off":
+    if variant in ("ynn-off", "hoistable", "hoisted"):
         jaxrail._compiler._CPU_OPTIONS["xla_cpu_experimental_ynn_fusion_type"] = ""
     scenario = load_scenario("paper-curve")
     first, *_ = run_scenario(scenario, duration, contact="table")
@@ -83,8 +94,7 @@ def child(variant, duration, runs):
     for _ in range(runs):
         second, *_ = run_scenario(scenario, duration, contact="table")
         walls.append(float(second.wall_time_s))
-    text = max((p.as_text() or "" for p in programs), key=len)  # the integration's
-    entry = text[text.find("\nENTRY"):]
+    integration = max((p.as_text() or "" for p in programs), key=len)
     steps = int(second.accepted_steps) + int(second.rejected_steps)
     print(json.dumps({
         "variant": variant, "status": second.status,
@@ -92,7 +102,7 @@ def child(variant, duration, runs):
         "run_s": [round(w, 3) for w in walls], "steps": steps,
         "us_per_step": round(1e6 * float(np.median(walls)) / steps, 1),
         "us_per_step_min": round(1e6 * min(walls) / steps, 1),
-        "loop_in_one_kernel": " while(" not in entry and "xla_cpu_small_call" in entry,
+        "loop_in_one_kernel": _loop_in_one_kernel(integration),
         "lateral": np.asarray(second.wheelset_lateral).tolist()}))
 
 
@@ -119,17 +129,17 @@ def toy_child(runs):
             start = time.perf_counter()
             jax.block_until_ready(compiled(a))
             times.append(1e3 * (time.perf_counter() - start))
-        text = compiled.as_text()
         out[name] = {"ms": round(statistics.median(times), 2),
-                     "loop_in_one_kernel": " while(" not in text[text.find("\nENTRY"):]}
+                     "loop_in_one_kernel": _loop_in_one_kernel(compiled.as_text())}
     print(json.dumps(out))
 
 
 def toy(runs):
     """:func:`toy_child` with XLA's default flags and with the threshold raised."""
     result = {}
-    for name, flags in (("default", ""), ("threshold", THRESHOLD)):
-        env = dict(os.environ, XLA_FLAGS=(os.environ.get("XLA_FLAGS", "") + " " + flags).strip())
+    for name, flags in (("default", os.environ.get("XLA_FLAGS", "")),
+                        ("threshold", _with_threshold())):
+        env = dict(os.environ, XLA_FLAGS=flags)
         out = subprocess.run([sys.executable, __file__, "--toy-child", "--runs", str(runs)],
                              capture_output=True, text=True, env=env, check=True)
         result[name] = json.loads(out.stdout.splitlines()[-1])
