@@ -31,7 +31,7 @@ from ._progress import SimulatedTimeBar
 from ._time_report import TimeReportingMeter, listening
 from .multibody import accelerations, constraints, simulate_system
 from .multibody.system import FixedLoads
-from .multibody.imex import IMEX
+from .multibody.imex import IMEX, JacobianCounter
 from .track import to_track_coordinates, track_frame
 from .track.irregularity import rail_offsets
 from .track.rails import HALF_TAPING_DISTANCE, track_irregularity
@@ -78,6 +78,8 @@ class SolverOptions:
     steps of about 0.3 ms by the stiff creep) or "imex" (the creep and the normal
     contact stiffness implicit, :class:`jaxrail.multibody.imex.IMEX`, KenCarp5;
     steps of about 1 ms; docs/simulation.md).
+    jacobian_every: with "imex", a new load Jacobian every this many accepted steps,
+    carried by the wheelsets' spin in between (1: every step; docs/simulation.md).
     """
 
     rtol: float = 1e-4
@@ -90,6 +92,7 @@ class SolverOptions:
     icoeff: float = 0.3
     fixed_step: float | None = None
     integrator: str = "tsit5"
+    jacobian_every: int = 8
 
     def __post_init__(self):
         if self.fixed_step is not None and not self.fixed_step > 0.0:
@@ -97,10 +100,15 @@ class SolverOptions:
         if self.integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got "
                              f"{self.integrator!r}")
+        if not (isinstance(self.jacobian_every, int) and self.jacobian_every >= 1):
+            raise ValueError(f"jacobian_every must be an integer >= 1, got "
+                             f"{self.jacobian_every!r}")
 
     def solver(self):
         """The diffrax solver of ``integrator``."""
-        return IMEX() if self.integrator == "imex" else diffrax.Tsit5()
+        if self.integrator == "imex":
+            return IMEX(jacobian_every=self.jacobian_every)
+        return diffrax.Tsit5()
 
     def controller(self):
         """diffrax step-size controller and first step [s]."""
@@ -110,21 +118,22 @@ class SolverOptions:
                                      icoeff=self.icoeff), self.dt0
 
 
-def evaluations_per_step(solver) -> tuple[int, int, int]:
-    """``(right-hand sides per step, right-hand sides at the start, load Jacobians per
-    step)`` of a step-size attempt, accepted or rejected, of ``solver``:
+def evaluations_per_step(solver) -> tuple[int, int]:
+    """``(right-hand sides per step, right-hand sides at the start)`` of a step-size
+    attempt, accepted or rejected, of ``solver``:
 
     - :class:`~jaxrail.multibody.imex.IMEX`: s (its stages; the first comes with the
-      load Jacobian, from one contact evaluation), none at the start, one Jacobian;
+      load Jacobian where the step evaluates one, from one contact evaluation), none
+      at the start; its load Jacobians are counted by
+      :class:`~jaxrail.multibody.imex.JacobianCounter`;
     - diffrax's Tsit5, first-same-as-last: 6 per step and 1 at the start.
 
-    ``(-1, -1, -1)`` for another solver. Counted in
-    ``tests/multibody/test_evaluations.py``."""
+    ``(-1, -1)`` for another solver. Counted in ``tests/multibody/test_evaluations.py``."""
     if isinstance(solver, IMEX):
-        return solver.stages, 0, 1
+        return solver.stages, 0
     if type(solver) is diffrax.Tsit5:
-        return 6, 1, 0
-    return -1, -1, -1
+        return 6, 1
+    return -1, -1
 
 
 class WheelOutputs(eqx.Module):
@@ -311,24 +320,32 @@ def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t1, ts, o
     """diffrax's Solution of eq. (19) from (q0, qdot0) at 0 to t1 [s] with ``solver``,
     saved at ``ts``, stopped by the derailment event; ``rails0``: a flexible track's
     rails ``(w, wdot)`` at 0, integrated with the bodies; ``report``: each accepted
-    step's time to the host (:class:`TimeReportingMeter`)."""
+    step's time to the host (:class:`TimeReportingMeter`). With IMEX the controller
+    counts its load Jacobians (:class:`JacobianCounter`, the saved controller state)."""
     controller, dt0 = options.controller()
+    counting = isinstance(solver, IMEX)
+    if counting:
+        controller = JacobianCounter(controller, solver.jacobian_every)
     return simulate_system(
         vehicle.system, params.system, q0, qdot0, t1, dt0=dt0,
-        saveat=diffrax.SaveAt(ts=ts), rtol=options.rtol, atol=options.atol, solver=solver,
+        saveat=diffrax.SaveAt(ts=ts, controller_state=counting), rtol=options.rtol,
+        atol=options.atol, solver=solver,
         external=loads, max_steps=options.max_steps, adjoint=adjoint, throw=False,
         stepsize_controller=controller,
         event=_stop_events(vehicle, track, limits, rest_heights), states0=rails0,
         progress_meter=TimeReportingMeter(t1) if report else None)
 
 
-def _evaluations(solver, steps):
-    """(right-hand sides, load Jacobians) of ``steps`` step attempts of ``solver``
-    (:func:`evaluations_per_step`), -1 each for a solver it does not know."""
-    per_step, at_start, jacobians = evaluations_per_step(solver)
+def _evaluations(solver, sol):
+    """(right-hand sides, load Jacobians) of the step attempts of ``solver`` in the
+    diffrax Solution ``sol`` of :func:`_integrate` (:func:`evaluations_per_step`; IMEX's
+    Jacobians from its :class:`JacobianCounter`), -1 each for a solver it does not
+    know."""
+    per_step, at_start = evaluations_per_step(solver)
     if per_step < 0:
         return jnp.asarray(-1), jnp.asarray(-1)
-    return steps * per_step + at_start, steps * jacobians
+    jacobians = sol.controller_state[-1] if isinstance(solver, IMEX) else jnp.asarray(0)
+    return sol.stats["num_steps"] * per_step + at_start, jacobians
 
 
 def _results(vehicle, params, track, model, q0, qdot0, rails0, ts, q, qdot, rails, result,
@@ -434,7 +451,7 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
                     *_saved_states(sol, (q0, qdot0, rails0)), sol.result, derailed,
                     sol.stats["num_steps"], sol.stats["num_accepted_steps"],
                     sol.stats["num_rejected_steps"],
-                    _evaluations(solver, sol.stats["num_steps"]), drive)
+                    _evaluations(solver, sol), drive)
 
 
 PROGRAMS_KEPT = 32

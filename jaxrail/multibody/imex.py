@@ -15,10 +15,22 @@ explicit in the first term and implicit (ESDIRK, L-stable) in the second, with J
 frozen at the step's start y0. The split is exact, so the method keeps its order
 whatever J is; J decides only which modes stay stable at long steps. The implicit
 term is linear, so each stage is one solve with I - h gamma J (the same matrix for
-every stage, inverted once per step) and no Newton iteration. Per step: one Jacobian
-of the stiff loads and s right-hand sides (s = 4, 6, 8 stages for KenCarp3, 4, 5). A
-step whose matrix I - h gamma J is not finite or singular ends the run with diffrax's
-result ``singular`` (the status "failed: singular implicit solve" of a simulation).
+every stage, inverted once per step) and no Newton iteration. Per step: s right-hand
+sides (s = 4, 6, 8 stages for KenCarp3, 4, 5) and, every ``jacobian_every`` accepted
+steps, one Jacobian of the stiff loads. A step whose matrix I - h gamma J is not
+finite or singular ends the run with diffrax's result ``singular`` (the status
+"failed: singular implicit solve" of a simulation).
+
+Because the split is exact, J may be kept across steps (a W-method in the sense of
+Steihaug and Wolfbrandt: the order does not depend on J). A spinning wheelset's Euler
+parameters turn by about 0.04 rad per millisecond, and J in those coordinates turns
+with them: a J one step old is 2 % off and doubles the steps the controller needs.
+So a kept J is carried to each step's start by each stiff body's turn about its own
+y axis since (:meth:`StiffJacobian.turned`, exact for a body of revolution such as a
+wheelset); what then still changes J (the contact's bounce, flange contact) is slow
+enough for a new J every 8 accepted steps (docs/simulation.md). A rejected attempt's
+solver state is dropped, so its retry evaluates J again where the attempt did;
+:class:`JacobianCounter` counts them.
 
 J = [[0, I], [A_q, A_v]] with y = (q, qdot): the accelerations' dependence on the
 positions and velocities of the bodies whose loads are stiff, through those loads
@@ -37,6 +49,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._when import computed_when, zeros_of
+from .quaternion import multiply
 from .system import FixedLoads, acceleration_response, accelerations, project_state, rhs
 
 METHODS = {"KenCarp3": 3, "KenCarp4": 4, "KenCarp5": 5}
@@ -47,11 +60,21 @@ class StiffJacobian(eqx.Module):
     ``columns`` (the coordinates of the bodies with stiff loads).
 
     Fields: columns (c,) static indices into q; a_q, a_v (7 n, c): accelerations per
-    unit change of those coordinates [1/s^2] and velocities [1/s]."""
+    unit change of those coordinates [1/s^2] and velocities [1/s]; bodies (static): the
+    number k of stiff bodies, whose columns come body by body, each body's 7
+    coordinates first (its Euler parameters at 3 to 6)."""
 
     columns: tuple[int, ...] = eqx.field(static=True)
     a_q: jax.Array
     a_v: jax.Array
+    bodies: int = eqx.field(static=True, default=0)
+
+    def euler_index(self):
+        """(k, 4) indices into q of the stiff bodies' Euler parameters."""
+        k = self.bodies
+        if k == 0:
+            return np.zeros((0, 4), dtype=int)
+        return np.asarray(self.columns, dtype=int).reshape(k, -1)[:, 3:7]
 
     def matvec(self, x):
         """J x for x = (x_q, x_v)."""
@@ -75,6 +98,34 @@ class StiffJacobian(eqx.Module):
         """Whether :meth:`factor`'s inverse is finite (a scalar bool): a matrix that is
         not finite or is singular (a zero pivot divides by zero) gives one that is not."""
         return jnp.all(jnp.isfinite(factored[1]))
+
+    def turned(self, turns):
+        """This J carried to a state where each stiff body is turned about its own y
+        axis by ``turns`` (k, 4) (Euler parameters, body frame: p -> p * turn): J' = S J
+        S^-1 with S the right product by the turn on each body's Euler parameters and
+        their rates. Exact for bodies of revolution about y under loads that do not
+        depend on the turn (wheelsets)."""
+        k = self.bodies
+        if k == 0:
+            return self
+        half = len(self.columns) // k
+        index = self.euler_index()
+        r0, r1, r2, r3 = (turns[:, i] for i in range(4))
+        right = jnp.stack([jnp.stack([r0, -r1, -r2, -r3], -1), jnp.stack([r1, r0, r3, -r2], -1),
+                           jnp.stack([r2, -r3, r0, r1], -1), jnp.stack([r3, r2, -r1, r0], -1)],
+                          axis=1)  # (k, 4, 4)
+        n = self.a_q.shape[0]
+        select = np.zeros((n, 4 * k))
+        select[index.ravel(), np.arange(4 * k)] = 1.0
+
+        def carried(a):
+            a3 = a.reshape(n, k, half)
+            e = jnp.einsum("nke,kfe->nkf", a3[:, :, 3:7], right)
+            a = jnp.concatenate([a3[:, :, :3], e, a3[:, :, 7:]], axis=-1).reshape(n, -1)
+            rows = a[index.ravel()].reshape(k, 4, -1)
+            change = jnp.einsum("kfe,kec->kfc", right, rows) - rows
+            return a + jnp.asarray(select) @ change.reshape(4 * k, -1)
+        return StiffJacobian(self.columns, carried(self.a_q), carried(self.a_v), k)
 
     def solve(self, hg, factored, rhs_):
         """x = (I - hg J)^-1 rhs_ for rhs_ = (b_q, b_v), with ``factored`` from
@@ -139,7 +190,21 @@ def stiff_jacobian(system, params, t, q, qdot, external, states=None, jacobian=T
     a_q = response[:, :, :half].reshape(n7 + k * r, -1)
     a_v = response[:, :, half:].reshape(n7 + k * r, -1)
     f = (qdot, qddot) if states is None else _pack((qdot, qddot, f_states))
-    return f, StiffJacobian(columns, a_q, a_v)
+    return f, StiffJacobian(columns, a_q, a_v, k)
+
+
+def _euler(jac, positions):
+    """The Euler parameters (k, 4) of J's stiff bodies in ``positions``."""
+    return positions[jac.euler_index()]
+
+
+def _twist(then, now):
+    """(k, 4): the part about the body y axis (the swing-twist split) of each body's
+    turn from Euler parameters ``then`` to ``now`` (k, 4), conj(then) * now."""
+    conj = then * jnp.asarray([1.0, -1.0, -1.0, -1.0])
+    r = jax.vmap(multiply)(conj, now)
+    t = jnp.stack([r[:, 0], jnp.zeros_like(r[:, 0]), r[:, 2], jnp.zeros_like(r[:, 0])], -1)
+    return t / jnp.linalg.norm(t, axis=1, keepdims=True)
 
 
 def _pack(y):
@@ -193,16 +258,59 @@ def _tableau(method):
             float(implicit.a_diagonal[1]))
 
 
+def refreshes(age, every):
+    """Whether a step evaluates a new load Jacobian, its J being ``age`` accepted steps
+    old (:class:`IMEX`'s ``jacobian_every``: ``every``)."""
+    return age >= every
+
+
+def aged(age, refreshed):
+    """The age of J after an accepted step that did (or did not) refresh it."""
+    return jnp.where(refreshed, 1, age + 1).astype(jnp.int32)
+
+
+class JacobianCounter(diffrax.AbstractStepSizeController):
+    """``controller`` counting the load Jacobians of an :class:`IMEX` that evaluates one
+    every ``every`` accepted steps, rejected attempts included (its state's last item).
+
+    A rejected attempt's solver state is dropped, so the solver cannot count; the
+    controller sees every attempt and whether it was kept, and follows the same age
+    (:func:`refreshes`, :func:`aged`)."""
+
+    controller: diffrax.AbstractStepSizeController
+    every: int = eqx.field(static=True)
+
+    def wrap(self, direction):
+        return JacobianCounter(self.controller.wrap(direction), self.every)
+
+    def init(self, terms, t0, t1, y0, dt0, args, func, error_order):
+        tnext, state = self.controller.init(terms, t0, t1, y0, dt0, args, func, error_order)
+        return tnext, (state, jnp.asarray(self.every, jnp.int32), jnp.asarray(0, jnp.int32))
+
+    def adapt_step_size(self, t0, t1, y0, y1_candidate, args, y_error, error_order,
+                        controller_state):
+        state, age, count = controller_state
+        refreshed = refreshes(age, self.every)
+        keep, tprev, tnext, jump, state, result = self.controller.adapt_step_size(
+            t0, t1, y0, y1_candidate, args, y_error, error_order, state)
+        age = jnp.where(keep, aged(age, refreshed), age)
+        return keep, tprev, tnext, jump, (state, age, count + refreshed), result
+
+
 class IMEX(diffrax.AbstractAdaptiveSolver):
     """The linearly implicit additive Runge-Kutta method of the module docstring for
     :func:`jaxrail.multibody.rhs` (``args = (system, params, external)``): the stiff
     loads of ``external.linearised`` implicit, the rest explicit. ``method``: one of
     :data:`METHODS` (order 3, 4 or 5, with an embedded solution one order lower for
-    the step-size controller). Output between steps by cubic Hermite interpolation.
+    the step-size controller). ``jacobian_every``: a new load Jacobian every this many
+    accepted steps, kept and turned with the stiff bodies in between (module
+    docstring; 1, the default here: every step, for bodies that are not bodies of
+    revolution about y). Output between steps by cubic Hermite interpolation.
     The stages run in a loop, the first with the loads' Jacobian and the inverse of
     I - h gamma J under a ``lax.cond``, so that the loads are compiled at one place."""
 
     method: str = eqx.field(static=True, default="KenCarp5")
+    jacobian_every: int = eqx.field(static=True, default=1)
 
     term_structure: ClassVar = diffrax.AbstractTerm
     interpolation_cls: ClassVar = diffrax.ThirdOrderHermitePolynomialInterpolation
@@ -211,6 +319,9 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         if self.method not in METHODS:
             raise ValueError(f"IMEX method must be one of {sorted(METHODS)}, got "
                              f"{self.method!r}")
+        if not (isinstance(self.jacobian_every, int) and self.jacobian_every >= 1):
+            raise ValueError(f"IMEX jacobian_every must be an integer >= 1, got "
+                             f"{self.jacobian_every!r}")
 
     @property
     def stages(self) -> int:
@@ -224,10 +335,22 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         return METHODS[self.method]
 
     def init(self, terms, t0, t1, y0, args):
-        return None
+        """None, or with ``jacobian_every`` > 1 (J, its age in accepted steps, the stiff
+        bodies' Euler parameters where J holds): a zero J as old as forces a new one."""
+        if self.jacobian_every == 1:
+            return None
+        system, params, *rest = args
+        like = y0
+
+        def jacobian_at(y):
+            y = _unpack(like, y)
+            return stiff_jacobian(system, params, t0, y[0], y[1], rest[0] if rest else None,
+                                  y[2] if len(y) == 3 else None)[1]
+        jac = zeros_of(jax.eval_shape(jacobian_at, _pack(y0)))
+        return jac, jnp.asarray(self.jacobian_every, jnp.int32), _euler(jac, _pack(y0)[0])
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
-        del solver_state, made_jump
+        del made_jump
         system, params, *rest = args
         external = rest[0] if rest else None
         c, a_e, a_i, b, b_error, gamma = _tableau(self.method)
@@ -240,7 +363,8 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
             """(f(y), J) at stage i: J (computed at the first stage only) at y0."""
             y = _unpack(like, y)
             f, jac = stiff_jacobian(system, params, t0 + c[i] * h, y[0], y[1], external,
-                                    y[2] if len(y) == 3 else None, jacobian=i == 0)
+                                    y[2] if len(y) == 3 else None,
+                                    jacobian=(i == 0) & refresh)
             return _pack(f), jac
 
         # per stage i: rows i and s + i hold the explicit part f(Y_i) - J (Y_i - y0) and
@@ -248,9 +372,16 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         # stage's right-hand side is one weighted sum over both tableaus. The first stage
         # runs in the loop too, so that the loads are evaluated at one place in the
         # program: it also gives J and the inverse of I - hg J, which the later stages use.
+        # A J kept from an earlier step is carried to y0 by the wheelsets' spin since.
+        if solver_state is None:
+            refresh, age = True, None
+        else:
+            kept, age, then = solver_state
+            refresh = refreshes(age, self.jacobian_every)
         f_like, jac_like = jax.eval_shape(lambda y: evaluate(0, y), y0)
         parts = jax.tree.map(lambda x: jnp.zeros((2 * s,) + x.shape, x.dtype), f_like)
-        jac = zeros_of(jac_like)
+        jac = (zeros_of(jac_like) if solver_state is None
+               else kept.turned(_twist(then, _euler(kept, y0[0]))))
         factored = zeros_of(jax.eval_shape(jac.factor, hg))  # the first stage's z is 0 with it
         rows = jnp.asarray(np.concatenate([a_e, a_i], axis=1))  # (s, 2 s)
         c = jnp.asarray(c)
@@ -264,7 +395,8 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
             # whatever J it computes (a J that is not finite must not reach f0)
             stiff = jac.matvec(z)
             first = i == 0
-            jac = jax.tree.map(lambda new, old: jnp.where(first, new, old), jac_here, jac)
+            take = first & refresh
+            jac = jax.tree.map(lambda new, old: jnp.where(take, new, old), jac_here, jac)
             factored = jax.lax.cond(first, lambda: jac.factor(hg), lambda: factored)
             parts = jax.tree.map(lambda stacked, x, w: stacked.at[i].set(x - w).at[s + i].set(w),
                                  parts, f, stiff)
@@ -292,7 +424,8 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
                  for key, value in _dense_info(h, y0, _pack(y1), f0).items()}
         result = diffrax.RESULTS.where(solved, diffrax.RESULTS.successful,
                                        diffrax.RESULTS.singular)
-        return y1, error, dense, None, result
+        state = None if solver_state is None else (jac, aged(age, refresh), _euler(jac, y0[0]))
+        return y1, error, dense, state, result
 
     def func(self, terms, t0, y0, args):
         return terms.vf(t0, y0, args)

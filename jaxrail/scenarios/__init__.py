@@ -64,6 +64,7 @@ class Scenario:
     fixed_step: float | None = None
     contact: str = "online"
     integrator: str = "tsit5"
+    jacobian_every: int = 8
     irregularities: IrregularitySpec | None = None
     flexible: dict | None = None
 
@@ -72,7 +73,8 @@ class Scenario:
         duration = self.duration if duration is None else duration
         options = SolverOptions(rtol=self.rtol, atol=self.atol, progress=progress,
                                 n_outputs=max(2, int(round(duration * self.output_rate)) + 1),
-                                integrator=self.integrator)
+                                integrator=self.integrator,
+                                jacobian_every=self.jacobian_every)
         if self.fixed_step is None:
             return options
         steps = int(math.ceil(duration / self.fixed_step - 1e-9))
@@ -160,7 +162,8 @@ _TABLES = {"vehicle": {"model", "wheel", "rail", "inclination", "data"},
            "contact": {"friction", "mode"},
            "track": {"segments", "flexible"},
            "run": {"speed", "misalignment", "duration"},
-           "solver": {"rtol", "atol", "output_rate", "fixed_step", "integrator"},
+           "solver": {"rtol", "atol", "output_rate", "fixed_step", "integrator",
+                      "jacobian_every"},
            "irregularities": None}
 
 
@@ -272,6 +275,8 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
                                                           "[solver] fixed_step"),
         contact=checks.text(contact, "mode", where, "[contact]", "online", CONTACT_MODELS),
         integrator=checks.text(solver, "integrator", where, "[solver]", "tsit5", INTEGRATORS),
+        jacobian_every=checks.count(solver.get("jacobian_every", 8), "[solver] jacobian_every",
+                                    where, 1, 1000),
         irregularities=parse_irregularities(raw.get("irregularities"), where),
         flexible=_flexible(tables["track"].get("flexible"), where),
     )

@@ -47,6 +47,15 @@ def number(value, name: str, where: str, key: str | None = None) -> float:
     return within(value, low, high, unit, label)
 
 
+def count(value, name: str, where: str, low: int, high: int) -> int:
+    """``value`` if it is an integer within [low, high], else ValueError naming
+    ``where`` and ``name``."""
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise ValueError(f"{where}: {name} must be an integer from {low} to {high}, got "
+                         f"{value!r}")
+    return value
+
+
 def known_keys(table, allowed, where: str, label: str) -> dict:
     """``table`` if it is a TOML table whose keys are all in ``allowed``, else
     ValueError naming the unknown key and the closest allowed one."""

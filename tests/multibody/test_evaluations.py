@@ -1,7 +1,9 @@
 """The right-hand sides and load Jacobians an integration evaluates, counted by a load
-that counts its own calls, against :func:`jaxrail.simulation.evaluations_per_step`,
-which a simulation's ``rhs_evaluations`` and ``jacobian_evaluations`` come from: IMEX
-(KenCarp3 and KenCarp5) and Tsit5, with step-size control rejecting steps."""
+that counts its own calls, against :func:`jaxrail.simulation.evaluations_per_step` and
+IMEX's :class:`~jaxrail.multibody.imex.JacobianCounter`, which a simulation's
+``rhs_evaluations`` and ``jacobian_evaluations`` come from: IMEX (KenCarp3 and
+KenCarp5, a new Jacobian every step or every third accepted one) and Tsit5, with
+step-size control rejecting steps."""
 
 import diffrax
 import equinox as eqx
@@ -10,7 +12,7 @@ import jax.numpy as jnp
 import pytest
 
 import jaxrail.multibody as mb
-from jaxrail.multibody.imex import IMEX
+from jaxrail.multibody.imex import IMEX, JacobianCounter
 from jaxrail.simulation import evaluations_per_step
 
 MASS = 2.0
@@ -56,24 +58,37 @@ class CountingSpring(eqx.Module):
         return (*self._loads(q, qdot), (0,), block)
 
 
-@pytest.mark.parametrize("solver", [IMEX("KenCarp5"), IMEX("KenCarp3"), diffrax.Tsit5()],
-                         ids=["KenCarp5", "KenCarp3", "Tsit5"])
+@pytest.mark.parametrize("solver", [IMEX("KenCarp5"), IMEX("KenCarp3"),
+                                    IMEX("KenCarp5", jacobian_every=3), diffrax.Tsit5()],
+                         ids=["KenCarp5", "KenCarp3", "KenCarp5-every-3", "Tsit5"])
 def test_counted_evaluations_equal_the_reported_ones(solver):
     CALLS.update(loads=0, linearised=0)
     q0 = jnp.array([1.0, 0, 0, 1.0, 0, 0, 0])
+    imex = isinstance(solver, IMEX)
+    controller = diffrax.PIDController(rtol=1e-8, atol=1e-10)
+    if imex:
+        controller = JacobianCounter(controller, solver.jacobian_every)
     # a first step far too long for the tolerance: the controller rejects steps
     sol = jax.jit(lambda q: mb.simulate_system(
-        BODY, BODY_PARAMS, q, jnp.zeros(7), 0.05, dt0=0.02, saveat=diffrax.SaveAt(t1=True),
-        solver=solver, external=CountingSpring(),
-        stepsize_controller=diffrax.PIDController(rtol=1e-8, atol=1e-10), throw=False,
+        BODY, BODY_PARAMS, q, jnp.zeros(7), 0.05, dt0=0.02,
+        saveat=diffrax.SaveAt(t1=True, controller_state=imex), solver=solver,
+        external=CountingSpring(), stepsize_controller=controller, throw=False,
         max_steps=10_000))(q0)
     jax.effects_barrier()
     steps, rejected = int(sol.stats["num_steps"]), int(sol.stats["num_rejected_steps"])
     assert sol.result == diffrax.RESULTS.successful and rejected >= 1 and steps >= 5
-    per_step, at_start, jacobians = evaluations_per_step(solver)
+    per_step, at_start = evaluations_per_step(solver)
     assert CALLS["loads"] + CALLS["linearised"] == per_step * steps + at_start
-    assert CALLS["linearised"] == jacobians * steps
+    if not imex:
+        assert CALLS["linearised"] == 0
+        return
+    assert CALLS["linearised"] == int(sol.controller_state[-1])
+    if solver.jacobian_every == 1:
+        assert CALLS["linearised"] == steps
+    else:  # fewer than one per attempt, rejected attempts included
+        accepted = int(sol.stats["num_accepted_steps"])
+        assert accepted / solver.jacobian_every <= CALLS["linearised"] < steps
 
 
 def test_an_unknown_solver_has_no_count():
-    assert evaluations_per_step(diffrax.Dopri5()) == (-1, -1, -1)
+    assert evaluations_per_step(diffrax.Dopri5()) == (-1, -1)
