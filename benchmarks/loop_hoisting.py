@@ -40,6 +40,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from _variants import run_variant  # benchmarks/_variants.py, beside this script
+
 VARIANTS = ("today", "ynn-off", "threshold", "hoistable", "hoisted")
 THRESHOLD = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=10000000000"
 
@@ -169,15 +171,7 @@ def main():
     for variant in args.variants:
         command = [sys.executable, __file__, "--child", variant, "--duration",
                    str(args.duration), "--runs", str(args.runs)]
-        load = round(os.getloadavg()[0], 2)
-        out = subprocess.run(command, capture_output=True, text=True)
-        try:
-            row = json.loads(out.stdout.splitlines()[-1]) if out.returncode == 0 else None
-        except (IndexError, json.JSONDecodeError):
-            row = None
-        if row is None:
-            row = {"variant": variant, "error": (out.stderr or out.stdout)[-2000:]}
-        rows.append(dict(row, load_1min_before=load))
+        rows.append(run_variant(command, variant))
     laterals = {r["variant"]: np.asarray(r.pop("lateral")) for r in rows if "lateral" in r}
     base = next((r for r in rows if r["variant"] == "today" and "error" not in r), None)
     for r in rows:

@@ -6,22 +6,22 @@ Prints JSON per profile kind, track (``--tracks smooth german-low``: the design 
 or the same with a realisation of that irregularity spectrum, seed 7, 3-150 m), contact
 model (``--contacts online table``), track support (``--supports rigid flexible``: rigid
 rails, or the co-moving flexible track with its default values) and integrator
-(``--integrators tsit5 imex``), all in one process, each irregular run's wall time over
+(``--integrators tsit5 imex``; ``imex-jN``: IMEX with a new load Jacobian every N
+accepted steps instead of 8), all in one process, each irregular run's wall time over
 its smooth twin's and each flexible run's over its rigid twin's: compile time, wall
 time, simulated time, real-time factor, steps accepted and rejected, right-hand-side
-evaluations (Tsit5: 6 per attempted step; IMEX: 8 and one Jacobian of the wheel-rail
-loads), status; for every run after the first of a profile and contact model, its
-largest differences from that first run (leading wheelset lateral displacement [mm],
-outer wheel's normal force [% of its largest], also outside impacts (from 0.05 s before
-to 0.25 s after a patch steeper than 0.3 rad appears on that wheel),
-and the intervals with two patches on a wheel of the leading wheelset). Compile times:
-cold (the runs use a new, empty persistent compilation cache) and cached (the same
-programs in a new process that finds them in that cache: ``cached_compile_time_s``,
-from a run of 1 ms with the same options). With ``--save DIR`` it also keeps each run (``DIR/<scenario>.pkl``, the
-SimulationResult as numpy arrays, for experiments/paper_curve/figures.py), its results
-file (``.h5``) and summary (``.json``). Each run also reports its leading wheelset's
-largest lateral displacement, its outer wheel's largest Q and Y/Q and the largest rail
-deflections.
+evaluations and load Jacobians (as the run counted them), status; for every run after
+the first of a profile and contact model, its largest differences from that first run
+(leading wheelset lateral displacement [mm], outer wheel's normal force [% of its
+largest], also outside impacts (from 0.05 s before to 0.25 s after a patch steeper than
+0.3 rad appears on that wheel), and the intervals with two patches on a wheel of the
+leading wheelset). Compile times: cold (the runs use a new, empty persistent compilation
+cache) and cached (the same programs in a new process that finds them in that cache:
+``cached_compile_time_s``, from a run of 1 ms with the same options). With ``--save
+DIR`` it also keeps each run (``DIR/<scenario>.pkl``, the SimulationResult as numpy
+arrays, for experiments/paper_curve/figures.py), its results file (``.h5``) and summary
+(``.json``). Each run also reports its leading wheelset's largest lateral displacement,
+its outer wheel's largest Q and Y/Q and the largest rail deflections.
 Usage: ``python benchmarks/paper_curve.py [--duration 41] [--save DIR]
 [--scenarios paper-curve-simplified paper-curve] [--tracks smooth german-low]
 [--contacts online] [--supports rigid] [--integrators tsit5 imex]``.
@@ -51,7 +51,6 @@ from jaxrail.scenarios import load_scenario, run_scenario  # noqa: E402
 from jaxrail.scenarios.irregularities import IrregularitySpec  # noqa: E402
 from jaxrail.simulation import simulate  # noqa: E402
 
-STAGES = {"tsit5": 6, "imex": 8}
 OUTER = 1  # the right wheel is the outer one in the paper's left curve
 IMPACT_ANGLE = 0.3  # [rad] a patch steeper than this is off the tread (tread: < 0.1 rad)
 IMPACT = (0.05, 0.25)  # [s] before and after such a patch appears: the impact's transient
@@ -68,7 +67,8 @@ def main():
     parser.add_argument("--contacts", nargs="+", default=["online"],
                         choices=("online", "table"))
     parser.add_argument("--integrators", nargs="+", default=["tsit5", "imex"],
-                        choices=("tsit5", "imex"))
+                        type=_integrator, help="tsit5, imex (a new load Jacobian every 8 "
+                        "accepted steps) or imex-jN (every N)")
     parser.add_argument("--supports", nargs="+", default=["rigid"],
                         choices=("rigid", "flexible"))
     parser.add_argument("--progress", action="store_true")
@@ -107,11 +107,22 @@ def main():
                                   "load": os.getloadavg()}}, indent=2))
 
 
+def _integrator(text):
+    """An ``--integrators`` entry: tsit5, imex or imex-jN (N >= 1)."""
+    if text in ("tsit5", "imex") or (text.startswith("imex-j") and text[6:].isdigit()
+                                      and int(text[6:]) >= 1):
+        return text
+    raise argparse.ArgumentTypeError(f"{text!r} is not tsit5, imex or imex-jN")
+
+
 def _scenario(name, track, integrator, support="rigid"):
-    """The built-in scenario ``name`` with ``integrator`` on the design track ("smooth")
-    or on a realisation of the spectrum ``track`` (seed 7, 3-150 m), on rigid rails or
-    the flexible track (``support``)."""
-    scenario = dataclasses.replace(load_scenario(name), integrator=integrator,
+    """The built-in scenario ``name`` with ``integrator`` (tsit5, imex, or imex-jN: a new
+    load Jacobian every N accepted steps) on the design track ("smooth") or on a
+    realisation of the spectrum ``track`` (seed 7, 3-150 m), on rigid rails or the
+    flexible track (``support``)."""
+    every = {} if not integrator.startswith("imex-j") else {"jacobian_every": int(integrator[6:])}
+    scenario = dataclasses.replace(load_scenario(name), integrator=integrator[:4] if every
+                                   else integrator, **every,
                                    flexible={} if support == "flexible" else None)
     if track == "smooth":
         return dataclasses.replace(scenario, irregularities=None)
@@ -163,7 +174,6 @@ def _outer_force(result):
 
 
 def _report(name, scenario, contact, integrator, result, reference):
-    steps = int(result.steps)
     wall = float(result.wall_time_s)
     report = {
         "scenario": name, "wheel": scenario.wheel, "contact": contact,
@@ -174,7 +184,9 @@ def _report(name, scenario, contact, integrator, result, reference):
         "steps_accepted": int(result.accepted_steps),
         "steps_rejected": int(result.rejected_steps),
         "mean_step_ms": round(1e3 * result.simulated_time_s / int(result.accepted_steps), 3),
-        "rhs_evaluations": STAGES[integrator] * steps + 1,
+        "rhs_evaluations": int(result.rhs_evaluations),
+        "jacobian_evaluations": int(result.jacobian_evaluations),
+        "jacobian_every": scenario.jacobian_every if scenario.integrator == "imex" else None,
         "max_constraint_violation_m": float(np.nanmax(result.constraint_violation)),
         "any_nan_in_valid_outputs": bool(np.any(np.isnan(
             np.asarray(result.wheelset_lateral)[np.asarray(result.valid)]))),

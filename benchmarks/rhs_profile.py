@@ -16,7 +16,9 @@ outside a loop; several times slower for these small programs):
 - ``rhs_median_us``: the whole right-hand side (:func:`jaxrail.vehicles.vehicle_accelerations`);
   ``xla_defaults_us``: the same compiled with XLA's default options instead;
 - ``imex_step_us``: one whole step of the IMEX integrator (KenCarp5, 1 ms: the load
-  Jacobian, the inverse of the step's matrix and 8 right-hand sides), in the same loop, and two of
+  Jacobian, the inverse of the step's matrix and 8 right-hand sides), in the same loop;
+  ``imex_step_kept_jacobian_us``: a step that keeps an earlier Jacobian (turned with the
+  wheelsets, as 7 of 8 steps do with ``jacobian_every=8``); and two of
   its parts: ``imex_jacobian_us``, the right-hand side with the stiff Jacobian
   (:func:`jaxrail.multibody.imex.stiff_jacobian`: the loads, their Jacobian per
   wheelset and the accelerations' response to it), and ``projection_us``, the
@@ -171,6 +173,19 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
         loads = VehicleLoads(vehicle, params, track, model)
         return stiff_jacobian(vehicle.system, params.system, 0.0, q, qdot, loads, rails)
 
+    # a load Jacobian at the start, for a step that keeps it (IMEX's jacobian_every)
+    kept = jax.jit(imex_jacobian)(q, qdot, data)[1]
+
+    @parts_of
+    def imex_step_kept(q, qdot, vehicle, params, track, model, rails):
+        loads = VehicleLoads(vehicle, params, track, model)
+        y0 = (q, qdot) if rails is None else (q, qdot, rails)
+        solver, term, args = IMEX(jacobian_every=8), diffrax.ODETerm(multibody_rhs), (
+            vehicle.system, params.system, loads)
+        euler = solver.init(term, 0.0, IMEX_STEP, y0, args)[2]
+        state = (kept, jnp.asarray(1, jnp.int32), euler)  # one step old: kept, turned
+        return solver.step(term, 0.0, IMEX_STEP, y0, args, state, False)[0]
+
     @parts_of
     def projection(q, qdot, vehicle, params, track, model, rails):
         return project_state(vehicle.system, params.system, q, qdot)
@@ -178,7 +193,7 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
     args = (q, qdot, data)
     programs = (("contact", contact), ("loads", loads), ("multibody", multibody), ("rhs", rhs))
     step_parts = (("imex_jacobian", imex_jacobian), ("projection", projection),
-                  ("imex_step", imex_step))
+                  ("imex_step", imex_step), ("imex_step_kept", imex_step_kept))
     parts = {name: timed(f, args, 10 * calls) for name, f in programs}
     looped = {name: timed_in_loop(f, args, calls) for name, f in programs + step_parts}
     us = {name: value[0] for name, value in looped.items()}
@@ -189,6 +204,7 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
         "loads_us": round(us["loads"], 1),
         "multibody_us": round(us["multibody"], 1),
         "imex_step_us": round(us["imex_step"], 1),
+        "imex_step_kept_jacobian_us": round(us["imex_step_kept"], 1),
         "imex_jacobian_us": round(us["imex_jacobian"], 1),
         "projection_us": round(us["projection"], 1),
         "xla_defaults_us": round(timed_in_loop(rhs, args, calls, options={})[0], 1),
