@@ -9,7 +9,9 @@ for ``--duration`` seconds in a process of its own, with JAX's and jaxrail's cac
 off:
 
 - ``jN``: a new J every N accepted steps (``j1``: every step, as before the reuse);
-- ``jN-unturned``: the same, the kept J used as it was (not turned with the wheelsets).
+- ``jN-unturned``: the same, the kept J used as it was (not turned with the wheelsets);
+- ``j8-KenCarp4``, ``j8-KenCarp3``: KenCarp4 (6 stages) or KenCarp3 (4) instead of
+  KenCarp5 (8), a new J every 8 accepted steps.
 
 Prints JSON: per variant the compile time, the wall times of ``--runs`` runs after the
 first (which compiles), steps accepted and rejected, load Jacobians and right-hand sides
@@ -28,7 +30,8 @@ import sys
 
 from _variants import run_variant  # benchmarks/_variants.py, beside this script
 
-VARIANTS = ("j1", "j2", "j4", "j8", "j16", "j32", "j2-unturned", "j8-unturned")
+VARIANTS = ("j1", "j2", "j4", "j8", "j16", "j32", "j2-unturned", "j8-unturned",
+            "j8-KenCarp4", "j8-KenCarp3")
 OUTER = 1  # the right wheel is the outer one in the paper's left curve
 
 
@@ -41,12 +44,16 @@ def child(variant, duration, runs, contact):
 
     from jaxrail import enable_float64
     enable_float64()
-    from jaxrail.multibody.imex import StiffJacobian
+    import jaxrail.simulation
+    from jaxrail.multibody.imex import IMEX, StiffJacobian
     from jaxrail.scenarios import load_scenario, run_scenario
 
     every = int(variant.split("-")[0][1:])
     if variant.endswith("-unturned"):
         StiffJacobian.turned = lambda self, turns: self
+    if "KenCarp" in variant:
+        method = variant.split("-")[1]
+        jaxrail.simulation.SolverOptions.solver = lambda self: IMEX(method, self.jacobian_every)
     scenario = dataclasses.replace(load_scenario("paper-curve"), integrator="imex",
                                    jacobian_every=every)
     first, *_ = run_scenario(scenario, duration, contact=contact)
@@ -57,6 +64,7 @@ def child(variant, duration, runs, contact):
     steps = int(result.steps)
     print(json.dumps({
         "variant": variant, "jacobian_every": every, "status": result.status,
+        "method": variant.split("-")[1] if "KenCarp" in variant else "KenCarp5",
         "compile_s": round(float(first.compile_time_s), 1),
         "run_s": [round(w, 3) for w in walls], "run_s_median": round(float(np.median(walls)), 3),
         "steps_accepted": int(result.accepted_steps),

@@ -12,14 +12,15 @@ tableaus diffrax ships) on the exact split
     f(y) = [f(y) - J (y - y0)] + J (y - y0),
 
 explicit in the first term and implicit (ESDIRK, L-stable) in the second, with J
-frozen at the step's start y0. The split is exact, so the method keeps its order
-whatever J is; J decides only which modes stay stable at long steps. The implicit
-term is linear, so each stage is one solve with I - h gamma J (the same matrix for
-every stage, inverted once per step) and no Newton iteration. Per step: s right-hand
-sides (s = 4, 6, 8 stages for KenCarp3, 4, 5) and, every ``jacobian_every`` accepted
-steps, one Jacobian of the stiff loads. A step whose matrix I - h gamma J is not
-finite or singular ends the run with diffrax's result ``singular`` (the status
-"failed: singular implicit solve" of a simulation).
+fixed over the step (evaluated at its start y0, or kept from an earlier step). The
+split is exact, so the method keeps its order whatever J is; J decides only which
+modes stay stable at long steps. The implicit term is linear, so each stage is one
+solve with I - h gamma J (the same matrix for every stage, inverted once per step)
+and no Newton iteration. Per step: s right-hand sides (s = 4, 6, 8 stages for
+KenCarp3, 4, 5) and, every ``jacobian_every`` accepted steps, one Jacobian of the
+stiff loads. A step whose matrix I - h gamma J is not finite or singular ends the
+run with diffrax's result ``singular`` (the status "failed: singular implicit solve"
+of a simulation).
 
 Because the split is exact, J may be kept across steps (a W-method in the sense of
 Steihaug and Wolfbrandt: the order does not depend on J). A spinning wheelset's Euler
