@@ -409,7 +409,8 @@ def _stability_command(args):
     if nonlinear is not None:
         print(f"nonlinear critical speed over {nonlinear[0]:g}-{nonlinear[1]:g} m/s: "
               "ramp-down, then brute force (minutes) ...", file=sys.stderr)
-        options = SolverOptions(rtol=scenario.rtol, atol=scenario.atol, integrator="imex")
+        options = SolverOptions(rtol=scenario.rtol, atol=scenario.atol, integrator="imex",
+                                jacobian_every=scenario.jacobian_every)
         say = None if args.quiet else (lambda line: print(line, file=sys.stderr))
         study["nonlinear"] = nonlinear_study(
             vehicle, params, track.with_irregularity(None).with_support(None), *nonlinear,

@@ -100,7 +100,8 @@ class SolverOptions:
         if self.integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got "
                              f"{self.integrator!r}")
-        if not (isinstance(self.jacobian_every, int) and self.jacobian_every >= 1):
+        if (isinstance(self.jacobian_every, bool) or not isinstance(self.jacobian_every, int)
+                or self.jacobian_every < 1):
             raise ValueError(f"jacobian_every must be an integer >= 1, got "
                              f"{self.jacobian_every!r}")
 

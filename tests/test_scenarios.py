@@ -1,5 +1,6 @@
 """Scenario files: the built-in ones parse and build; bad files are named clearly."""
 
+import importlib.resources
 import re
 from pathlib import Path
 
@@ -209,6 +210,13 @@ def test_fixed_steps_cover_the_duration_exactly():
     assert options.fixed_step == 5e-4 and options.max_steps == 2001  # 2000 steps + 1
     assert scenario.solver_options(duration=0.25).max_steps == 501
     assert load_scenario("paper-curve").solver_options().fixed_step is None
+
+
+def test_the_jacobian_interval_reaches_the_solver():
+    path = importlib.resources.files("jaxrail.scenarios").joinpath("data/paper-curve.toml")
+    text = path.read_text().replace("[solver]", "[solver]\njacobian_every = 4")
+    assert parse_scenario(text, "x.toml").solver_options().solver().jacobian_every == 4
+    assert load_scenario("paper-curve").solver_options().solver().jacobian_every == 8
 
 
 def test_bogie_carries_half_the_carbody():

@@ -13,9 +13,15 @@ def zeros_of(shapes):
 def computed_when(flag, function):
     """``function()`` where ``flag`` holds, zeros of its shapes elsewhere.
 
-    ``flag``: a Python bool (then ``function`` is called or not, as written) or a traced
+    ``flag``: a Python bool (then ``function`` is called or not, as written), a traced
     scalar bool (then one ``lax.cond``, so that a loop whose first iteration alone needs
-    the part holds it once and runs it once)."""
+    the part holds it once and runs it once), or a tuple of them, all of which must hold,
+    tested one inside the other in order. Under ``vmap`` a ``lax.cond`` on a batched flag
+    runs both branches; a loop's own counter stays unbatched, so it goes first."""
+    if isinstance(flag, tuple):
+        if not flag:
+            return function()
+        return computed_when(flag[0], lambda: computed_when(flag[1:], function))
     if flag is True:
         return function()
     zeros = lambda: zeros_of(jax.eval_shape(function))  # noqa: E731

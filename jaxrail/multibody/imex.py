@@ -143,9 +143,10 @@ class StiffJacobian(eqx.Module):
 def stiff_jacobian(system, params, t, q, qdot, external, states=None, jacobian=True):
     """(f(y) = (qdot, qddot), :class:`StiffJacobian`) at y = (q, qdot).
 
-    ``jacobian``: a bool, which may be traced: where it is False, J's entries are zeros,
-    not computed, so that a loop of stages of which only the first needs J evaluates the
-    loads at one place (:class:`IMEX`). It is passed on as
+    ``jacobian``: a bool, which may be traced, or a tuple of them that must all hold
+    (:func:`~jaxrail.multibody._when.computed_when`): where it is False, J's entries are
+    zeros, not computed, so that a loop of stages of which only the first needs J
+    evaluates the loads at one place (:class:`IMEX`). It is passed on as
     ``external.linearised(..., jacobian=...)``: an ``external`` takes that keyword (it
     may ignore it and return its blocks anyway).
 
@@ -320,7 +321,8 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         if self.method not in METHODS:
             raise ValueError(f"IMEX method must be one of {sorted(METHODS)}, got "
                              f"{self.method!r}")
-        if not (isinstance(self.jacobian_every, int) and self.jacobian_every >= 1):
+        if (isinstance(self.jacobian_every, bool) or not isinstance(self.jacobian_every, int)
+                or self.jacobian_every < 1):
             raise ValueError(f"IMEX jacobian_every must be an integer >= 1, got "
                              f"{self.jacobian_every!r}")
 
@@ -365,7 +367,7 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
             y = _unpack(like, y)
             f, jac = stiff_jacobian(system, params, t0 + c[i] * h, y[0], y[1], external,
                                     y[2] if len(y) == 3 else None,
-                                    jacobian=(i == 0) & refresh)
+                                    jacobian=(i == 0, refresh))
             return _pack(f), jac
 
         # per stage i: rows i and s + i hold the explicit part f(Y_i) - J (Y_i - y0) and
@@ -373,7 +375,9 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         # stage's right-hand side is one weighted sum over both tableaus. The first stage
         # runs in the loop too, so that the loads are evaluated at one place in the
         # program: it also gives J and the inverse of I - hg J, which the later stages use.
-        # A J kept from an earlier step is carried to y0 by the wheelsets' spin since.
+        # A J kept from an earlier step is carried to y0 by the wheelsets' spin since. The
+        # first stage tests its index before ``refresh``: under vmap ``refresh`` is
+        # batched, and a cond on it alone would run the Jacobian at every stage.
         if solver_state is None:
             refresh, age = True, None
         else:

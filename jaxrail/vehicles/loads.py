@@ -254,8 +254,9 @@ class VehicleLoads(eqx.Module):
         """``(forces, torques, bodies, blocks)``: the loads of ``__call__``, the
         wheelset body indices and each wheelset's load Jacobian (W, 7, 14)
         (:func:`wheelset_load_jacobian`), from one contact evaluation. ``jacobian``: a
-        bool, which may be traced (:func:`~jaxrail.multibody.imex.stiff_jacobian`):
-        where it is False the blocks are zeros, not computed.
+        bool, which may be traced, or a tuple of them that must all hold
+        (:func:`~jaxrail.multibody.imex.stiff_jacobian`): where it is False the blocks
+        are zeros, not computed.
 
         On a flexible track, with the rails at ``rails = (w, wdot)`` (W, 2, 2):
         ``(forces, torques, rails_dot, bodies, blocks, rail_rows)``, with the rails'

@@ -54,7 +54,12 @@ class CountingSpring(eqx.Module):
             _count("loads")
             return jnp.zeros((1, 7, 14))
 
-        block = jax.lax.cond(jacobian, with_jacobian, without)
+        def when(flags):  # IMEX's flags: one, or a tuple tested one inside the other
+            if not flags:
+                return with_jacobian()
+            return jax.lax.cond(flags[0], lambda: when(flags[1:]), without)
+
+        block = when(jacobian if isinstance(jacobian, tuple) else (jacobian,))
         return (*self._loads(q, qdot), (0,), block)
 
 
@@ -92,3 +97,22 @@ def test_counted_evaluations_equal_the_reported_ones(solver):
 
 def test_an_unknown_solver_has_no_count():
     assert evaluations_per_step(diffrax.Dopri5()) == (-1, -1)
+
+
+def test_under_vmap_the_jacobian_stays_at_the_first_stage():
+    """In a batch each member's J has its own age, so whether to refresh is a batched
+    flag, and a ``lax.cond`` on it runs both branches. IMEX tests its stage first
+    (unbatched), so the Jacobian runs once per step attempt of the batch, not at all 8
+    stages. Each counted call is one batched evaluation."""
+    CALLS.update(loads=0, linearised=0)
+    q0 = jnp.array([[1.0, 0, 0, 1.0, 0, 0, 0], [0.5, 0, 0, 1.0, 0, 0, 0]])
+    sol = jax.jit(jax.vmap(lambda q: mb.simulate_system(
+        BODY, BODY_PARAMS, q, jnp.zeros(7), 0.05, dt0=0.02, saveat=diffrax.SaveAt(t1=True),
+        solver=IMEX(jacobian_every=3), external=CountingSpring(),
+        stepsize_controller=diffrax.PIDController(rtol=1e-8, atol=1e-10), throw=False,
+        max_steps=10_000)))(q0)
+    jax.effects_barrier()
+    attempts = int(jnp.max(sol.stats["num_steps"]))  # the batch's loop runs them all
+    assert attempts >= 5
+    assert CALLS["linearised"] == attempts
+    assert CALLS["loads"] == 8 * attempts  # the other 7 stages, and the first's select
