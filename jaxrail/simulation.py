@@ -31,7 +31,7 @@ from ._progress import SimulatedTimeBar
 from ._time_report import TimeReportingMeter, listening
 from .multibody import accelerations, constraints, simulate_system
 from .multibody.system import FixedLoads
-from .multibody.imex import IMEX, JacobianCounter
+from .multibody.imex import IMEX, JacobianCounter, check_jacobian_every
 from .track import to_track_coordinates, track_frame
 from .track.irregularity import rail_offsets
 from .track.rails import HALF_TAPING_DISTANCE, track_irregularity
@@ -100,10 +100,7 @@ class SolverOptions:
         if self.integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got "
                              f"{self.integrator!r}")
-        if (isinstance(self.jacobian_every, bool) or not isinstance(self.jacobian_every, int)
-                or self.jacobian_every < 1):
-            raise ValueError(f"jacobian_every must be an integer >= 1, got "
-                             f"{self.jacobian_every!r}")
+        check_jacobian_every(self.jacobian_every)
 
     def solver(self):
         """The diffrax solver of ``integrator``."""

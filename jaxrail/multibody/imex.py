@@ -260,6 +260,12 @@ def _tableau(method):
             float(implicit.a_diagonal[1]))
 
 
+def check_jacobian_every(value, label="jacobian_every"):
+    """ValueError naming ``label`` unless ``value`` is an integer >= 1 (not a bool)."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise ValueError(f"{label} must be an integer >= 1, got {value!r}")
+
+
 def refreshes(age, every):
     """Whether a step evaluates a new load Jacobian, its J being ``age`` accepted steps
     old (:class:`IMEX`'s ``jacobian_every``: ``every``)."""
@@ -321,10 +327,7 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         if self.method not in METHODS:
             raise ValueError(f"IMEX method must be one of {sorted(METHODS)}, got "
                              f"{self.method!r}")
-        if (isinstance(self.jacobian_every, bool) or not isinstance(self.jacobian_every, int)
-                or self.jacobian_every < 1):
-            raise ValueError(f"IMEX jacobian_every must be an integer >= 1, got "
-                             f"{self.jacobian_every!r}")
+        check_jacobian_every(self.jacobian_every, "IMEX jacobian_every")
 
     @property
     def stages(self) -> int:
