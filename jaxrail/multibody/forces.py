@@ -282,21 +282,57 @@ def _bump_params(specs, what):
 
 
 class ForceKind(typing.NamedTuple):
-    """One kind of force element: its deformation coordinates ``s(q_i, q_j, e)``, its
-    law ``F(s, sdot, e)``, its stored energy ``V(s, e)`` [J] and ``params(specs,
-    what)``, which checks the kind's build-time descriptions and makes its traced
-    parameters (leading axis: the elements)."""
+    """One kind of force element.
+
+    Fields:
+        coordinates: ``s(q_i, q_j, e)``, the deformation coordinates (c,).
+        law: ``F(s, sdot, e)`` (c,), the generalized force along s (tension positive:
+            the bodies feel ``-(ds/dq)^T F``); for a kind with internal states,
+            ``F(s, sdot, e, z)``.
+        potential: ``V(s, e)`` [J], the stored energy (0 for a kind that stores none);
+            for a kind with internal states, ``V(s, e, z)``.
+        params: ``params(specs, what)`` checks the kind's build-time descriptions and
+            makes its traced parameters (leading axis: the elements).
+        power: ``P(s, sdot, e)`` [W] (``P(s, sdot, e, z)`` with internal states), the
+            power the element dissipates (>= 0), or None where it dissipates none.
+        states: the number of internal states per element (0: none).
+        rate: ``zdot(s, sdot, e, z)`` (states,), the internal states' derivatives, for
+            a kind with internal states.
+        initial: ``z0(s, e)`` (states,), the internal states at rest with deformation
+            s (the element unloaded by its internal states), for such a kind.
+    """
 
     coordinates: typing.Callable
     law: typing.Callable
     potential: typing.Callable
     params: typing.Callable
+    power: typing.Callable | None = None
+    states: int = 0
+    rate: typing.Callable | None = None
+    initial: typing.Callable | None = None
+
+
+def _spring_power(s, sdot, e):
+    return jnp.sum(e.damping * sdot**2)
+
+
+def _bushing_power(s, sdot, e):
+    return jnp.sum(e.damping * sdot**2)
+
+
+def _bump_power(s, sdot, e):
+    gap = s - e.clearance
+    push = e.stiffness * gap + e.damping * sdot
+    return jnp.sum(jnp.where((gap > 0.0) & (push > 0.0), e.damping * sdot**2, 0.0))
 
 
 FORCE_KINDS = {
-    "spring_damper": ForceKind(_spring_coords, _spring_law, _spring_potential, _spring_params),
-    "bushing": ForceKind(_bushing_coords, _bushing_law, _bushing_potential, _bushing_params),
-    "bump_stop": ForceKind(_bump_coords, _bump_law, _bump_potential, _bump_params),
+    "spring_damper": ForceKind(_spring_coords, _spring_law, _spring_potential, _spring_params,
+                               _spring_power),
+    "bushing": ForceKind(_bushing_coords, _bushing_law, _bushing_potential, _bushing_params,
+                         _bushing_power),
+    "bump_stop": ForceKind(_bump_coords, _bump_law, _bump_potential, _bump_params,
+                           _bump_power),
 }
 
 
