@@ -132,14 +132,15 @@ def _emit_json(data, path):
 def _simulate_command(args):
     from . import __version__
     from .results import summarize, write_results
-    from .scenarios import load_scenario, run_scenario
+    from .scenarios import load_scenario, prepare_scenario, run_scenario
 
-    scenario = _with_integrator(load_scenario(args.scenario), args)
+    scenario = _with_integrator(load_scenario(args.scenario), args)  # reads a measured file
     duration = _duration(scenario, args)
     print(f"jaxrail simulate {scenario.name}: {scenario.description}", file=sys.stderr)
+    prepared = prepare_scenario(scenario, duration)  # the irregularity covers the run
     print(f"compiling, then simulating {duration:g} s ...", file=sys.stderr)
     result, vehicle, params, _ = run_scenario(scenario, duration, progress=not args.quiet,
-                                              contact=args.contact)
+                                              contact=args.contact, prepared=prepared)
     summary = summarize(result, friction=float(params.contact.friction))
     summary["scenario"] = scenario.name
     print(f"{result.status}: {result.simulated_time_s:g} s simulated in "

@@ -17,6 +17,7 @@ wheel from the rail, positive towards the field side).
 import datetime
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -373,9 +374,29 @@ def _plain(value):
     return value.item() if isinstance(value, np.generic) else value
 
 
+RESULTS_FILE = "an HDF5 results file written by `jaxrail simulate --out` (docs/results.md)"
+
+
+def open_results(path):
+    """``h5py.File(path, "r")``, open, of a results file. Checked first: a ValueError names
+    ``path`` and what was expected when it is missing, a folder or not HDF5 (h5py's own
+    message names neither)."""
+    import h5py
+
+    where = Path(path)
+    if not where.exists():
+        raise ValueError(f"{path}: no such file; expected {RESULTS_FILE}")
+    if where.is_dir():
+        raise ValueError(f"{path}: is a folder; expected {RESULTS_FILE}")
+    if not h5py.is_hdf5(where):
+        raise ValueError(f"{path}: not an HDF5 file; expected {RESULTS_FILE}")
+    return h5py.File(where, "r")
+
+
 def read_results(path) -> dict:
     """A results file as plain NumPy: ``{dataset path: array, "attrs": root attributes,
-    "units": {dataset path: units}}``; ``valid`` and ``contact/active`` as bool."""
+    "units": {dataset path: units}}``; ``valid`` and ``contact/active`` as bool.
+    ValueError (:func:`open_results`) when ``path`` is not an HDF5 file."""
     import h5py
 
     out, units = {}, {}
@@ -386,7 +407,7 @@ def read_results(path) -> dict:
             out[name] = data.astype(bool) if name in ("valid", "contact/active") else data
             units[name] = _plain(node.attrs["units"])
 
-    with h5py.File(path, "r") as f:
+    with open_results(path) as f:
         f.visititems(visit)
         out["attrs"] = {k: _plain(v) for k, v in f.attrs.items()}
     out["units"] = units

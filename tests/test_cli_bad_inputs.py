@@ -7,8 +7,13 @@ import pytest
 
 from jaxrail.cli import main
 
-SCENARIO = str(Path(__file__).parent / "data" / "wheelset-straight.toml")
+DATA = Path(__file__).parent / "data"
+SCENARIO = str(DATA / "wheelset-straight.toml")
+RESULTS_FILE = "expected an HDF5 results file written by `jaxrail simulate --out`"
 BAD_INPUTS = [
+    (["assess", SCENARIO], f"{SCENARIO}: not an HDF5 file; {RESULTS_FILE}"),
+    (["assess", "nofile.h5"], f"nofile.h5: no such file; {RESULTS_FILE}"),
+    (["assess", str(DATA)], f"{DATA}: is a folder; {RESULTS_FILE}"),
     (["montecarlo", SCENARIO, "--samples", "4", "--vary", "speed=-20:-10"],
      "--vary speed: a drawn value must be within [0.1, 160] m/s"),
     (["montecarlo", SCENARIO, "--samples", "4", "--vary", "friction=-0.3,-0.1"],
@@ -103,3 +108,34 @@ def test_output_paths_are_checked_before_the_run(outputs, message, tmp_path, cap
 def test_bad_geometry_and_profile_options_are_named(argv, message, capsys):
     assert main(argv) == 2
     assert message in capsys.readouterr().err
+
+
+HEADER = "distance [m],alignment [mm],vertical level [mm],cross level [mm],gauge deviation [mm]"
+
+
+def measured_rows(length_m, step_m=0.25, vertical_mm="1.0"):
+    """Rows of a measured irregularity file from 0 to ``length_m`` [m]; the vertical
+    level of the third row is ``vertical_mm`` (text), the rest 0.5 mm."""
+    rows = [f"{k * step_m:g},0.5,{vertical_mm if k == 2 else '0.5'},0.5,0.5"
+            for k in range(round(length_m / step_m) + 1)]
+    return "\n".join([HEADER, *rows]) + "\n"
+
+
+@pytest.mark.parametrize("text, message", [
+    (measured_rows(20.0, vertical_mm="x"),
+     "line 4: column 'vertical level [mm]': 'x' is not a number"),
+    (measured_rows(20.0, vertical_mm="900"), "a value of 900 mm: more than 500 mm"),
+    (measured_rows(20.0).replace("\n0.5,", "\n0.6,", 1), "unequal spacing"),
+    (HEADER.replace("gauge", "gage") + "\n", "missing column(s) gauge deviation [mm]"),
+    # well formed, but the run's wheelset goes from 5 to 6 m: the file ends at 3 m
+    (measured_rows(3.0), "covers s = 0 to 3 m but the run's wheelsets go from 5.0 to 6.0 m"),
+])
+def test_a_bad_measured_irregularity_file_stops_simulate_before_compiling(text, message,
+                                                                          tmp_path, capsys):
+    (tmp_path / "line.csv").write_text(text)
+    scenario = tmp_path / "measured.toml"
+    scenario.write_text(Path(SCENARIO).read_text() + '\n[irregularities]\nfile = "line.csv"\n')
+    assert main(["simulate", str(scenario), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "line.csv" in err and "Traceback" not in err
+    assert "compiling" not in err

@@ -31,7 +31,8 @@ from ..vehicles import CONTACT_MODELS, bogie, contact_model, single_wheelset, tr
 from ..vehicles.suspended_wheelset import suspended_wheelset
 from ..vehicles.trailer import trailer_values
 
-__all__ = ["BUILTIN", "Scenario", "load_scenario", "parse_scenario", "run_scenario"]
+__all__ = ["BUILTIN", "Scenario", "load_scenario", "parse_scenario", "prepare_scenario",
+           "run_scenario"]
 
 BUILTIN = ("paper-curve", "paper-curve-simplified", "paper-curve-irregular", "straight",
            "straight-irregular", "bogie-curve-entry", "suspended-wheelset")
@@ -303,12 +304,26 @@ def load_scenario(name_or_path) -> Scenario:
     return parse_scenario(text, str(path))
 
 
-def run_scenario(scenario: Scenario, duration=None, progress=False, contact=None):
-    """Build and simulate a scenario: ``(result, vehicle, params, track)``. ``contact``:
-    ``"online"`` or ``"table"``, overriding the scenario's ``[contact] mode``."""
+def prepare_scenario(scenario: Scenario, duration=None):
+    """``(vehicle, params, track)`` of ``scenario``, built and checked for a run of
+    ``duration`` [s] (default the scenario's): ValueError when the irregularity (a
+    measured file or a realisation) does not cover the run. Nothing is compiled or
+    simulated; :func:`run_scenario` takes the result as ``prepared``."""
     vehicle, params, track = scenario.build()
     duration = scenario.duration if duration is None else float(duration)
     scenario.check_irregularity_covers(track, params, duration)
+    return vehicle, params, track
+
+
+def run_scenario(scenario: Scenario, duration=None, progress=False, contact=None,
+                 prepared=None):
+    """Build and simulate a scenario: ``(result, vehicle, params, track)``. ``contact``:
+    ``"online"`` or ``"table"``, overriding the scenario's ``[contact] mode``.
+    ``prepared``: :func:`prepare_scenario`'s ``(vehicle, params, track)`` for the same
+    scenario and duration (built and checked again when not given)."""
+    duration = scenario.duration if duration is None else float(duration)
+    vehicle, params, track = (prepare_scenario(scenario, duration) if prepared is None
+                              else prepared)
     model = scenario.contact_model(vehicle, params, contact, progress)
     result = simulate(vehicle, params, track, duration, scenario.speed, scenario.misalignment,
                       options=scenario.solver_options(duration, progress), contact_model=model)

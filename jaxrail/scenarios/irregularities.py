@@ -77,7 +77,9 @@ def _integer(value, name, where):
 
 def parse_irregularities(table, where: str) -> IrregularitySpec | None:
     """The :class:`IrregularitySpec` of an ``[irregularities]`` table (None without one);
-    ValueError names the file, the key and what is allowed."""
+    ValueError names the file, the key and what is allowed. A measured ``file`` is read
+    and checked here (:func:`jaxrail.track.measured.read_irregularity`), and again when
+    the track is built."""
     if table is None:
         return None
     checks.known_keys(table, _KEYS, where, "[irregularities]")
@@ -112,6 +114,10 @@ def parse_irregularities(table, where: str) -> IrregularitySpec | None:
             path = Path(where).parent / path
         if not path.is_file():
             raise ValueError(f"{where}: {label('file')}: no such file {str(path)!r}")
+        try:  # read now, so that a bad file stops the scenario before anything runs
+            read_irregularity(path)
+        except ValueError as error:
+            raise ValueError(f"{where}: {label('file')}: {error}") from None
         return IrregularitySpec(source, file=str(path), scale=scale)
     defect = checks.known_keys(table["defect"], _DEFECT_KEYS, where, label("defect"))
     missing = sorted(_DEFECT_KEYS - set(defect))

@@ -76,10 +76,11 @@ def comfort_of_file(path, body="carbody", points=None) -> dict:
     before the first ``valid = 0``. ValueError names a missing dataset or body, or a
     record shorter than one 5 s block.
     :func:`jaxrail.standards.from_result.comfort_of_result` does the same for a
-    :class:`jaxrail.simulation.SimulationResult` in memory."""
-    import h5py
+    :class:`jaxrail.simulation.SimulationResult` in memory. A ValueError names ``path``
+    when it is missing or not an HDF5 file (:func:`jaxrail.results.open_results`)."""
+    from ..results import open_results
 
-    with h5py.File(path, "r") as f:
+    with open_results(path) as f:
         missing = [n for n in ("time", "valid", "bodies/q", "bodies/qdot", "bodies/qddot")
                    if n not in f]
         if missing:

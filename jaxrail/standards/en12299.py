@@ -7,9 +7,10 @@ Frames: x longitudinal (direction of travel), y lateral, z vertical, all in the
 carbody (floor) frame, as accelerometers fixed to the floor measure them. Accelerations
 in m/s^2, frequencies in Hz, times in s. Signs do not matter: every index is an rms.
 
-- Weightings ``Wb`` (vertical, ISO 2631-4), ``Wc`` (seat back, x), ``Wd`` (horizontal,
-  ISO 2631-1) and ``Wp`` (roll, EN 12299; its constants are the least certain, see
-  :data:`WEIGHTINGS`): :func:`weighting_response`, :func:`weighting_gain`, :func:`weight`.
+- Weightings ``Wb`` (vertical, EN 12299's own: not ISO 2631-4's Wb, see
+  :data:`WEIGHTINGS`), ``Wc`` (seat back, x), ``Wd`` (horizontal, ISO 2631-1) and ``Wp``
+  (roll, EN 12299; its constants are the least certain): :func:`weighting_response`,
+  :func:`weighting_gain`, :func:`weight`.
 - Continuous comfort Cc_x, Cc_y, Cc_z: :func:`continuous_comfort`.
 - Mean comfort, standard (simplified) method N_MV: :func:`mean_comfort`,
   :func:`mean_comfort_points`, :func:`comfort_class`.
@@ -87,19 +88,33 @@ class Weighting:
     q2: float = BUTTERWORTH_Q
 
 
-# [V-src: ISO 8041 Table "Parameters and transfer functions of the frequency
-# weightings", as printed in the Larson Davis HVM200 Reference Manual, Table 3.1, for
-# Wb, Wc, Wd, every f, Q and K (the same numbers for Wb in the BS 6841 weighting code
-# of cseats/Footfall_app_data, bs6841bandlimit.m, which writes the gain as 0.4 =
-# 1.024 (2.5/4)^2). Checked numerically: |W| at 100 rad/s is Wb 0.8126, Wc 0.5145,
-# Wd 0.1261, the ISO 8041 reference values listed by ZETLAB; Wd at 0.5 ... 16 Hz
-# reproduces the ISO 2631-1 Table 3 factors. High confidence.] Which axis takes which:
-# Wd for x and y, Wb for z on the floor [V-src: PyRidy comfort.py, comfpy
-# en12299.py]; Wc for the seat back (complete method, not implemented here) [R].
+# Wc, Wd: [V-src: ISO 8041 Table "Parameters and transfer functions of the frequency
+# weightings", as printed in the Larson Davis HVM200 Reference Manual, Table 3.1, every
+# f, Q and K. Checked numerically: |W| at 100 rad/s is Wc 0.5145, Wd 0.1261, the ISO
+# 8041 reference values listed by ZETLAB; Wd at 0.5 ... 16 Hz reproduces the ISO 2631-1
+# Table 3 factors. High confidence.]
+#
+# Wb is EN 12299's, not ISO 2631-4's (ISO 8041's): the same corner frequencies, but
+# Q4 = 0.63 (ISO: 0.55) and Q5 = Q6 = 0.8 (ISO: 0.9, 0.95); 8 % less gain at 4 Hz, 13 %
+# more at 16 Hz. [V-src: the two public EN 12299 implementations found, PyRidy
+# pyridy/processing/comfort.py ComfortProcessor.Wb and comfpy comfpy/filters.py Wb
+# (github.com/ifs-rwth-aachen/PyRidy, github.com/tobias-bettinger/comfpy; both RWTH
+# Aachen IFS, probably one transcription): f1 0.4, f2 100, f3 = f4 16, Q4 0.63, f5 2.5,
+# Q5 0.8, f6 4, Q6 0.8, K 0.4, with the upward step written K (1 + s/(Q5 w5) +
+# s^2/w5^2) / (1 + s/(Q6 w6) + s^2/w6^2), i.e. normalised to K at 0 Hz: here the step is
+# normalised to (f5/f6)^2 at 0 Hz, so gain = 0.4 (4/2.5)^2 = 1.024, the same curve.
+# NOT checked against the text of EN 12299 (not public): medium confidence.] [R, from
+# review, not found in a public source] that EN 12299 keeps the Wb of ENV 12299 and
+# BS 6841; a public BS 6841:1987 implementation (github.com/cseats/Footfall_app_data,
+# bs6841freqweight.m) has ISO 2631-4's Q values, so that lineage is unconfirmed.
+#
+# Which axis takes which: Wd for x and y, Wb for z on the floor [V-src: PyRidy
+# comfort.py, comfpy en12299.py]; Wc for the seat back (complete method, not implemented
+# here) [R].
 WEIGHTINGS: Mapping[str, Weighting] = MappingProxyType({
-    "Wb": Weighting("Wb", "vertical z, floor and seat (ISO 2631-4)",
-                    f1=0.4, f2=100.0, f3=16.0, f4=16.0, q4=0.55,
-                    f5=2.5, q5=0.9, f6=4.0, q6=0.95, gain=1.024),
+    "Wb": Weighting("Wb", "vertical z, floor and seat (EN 12299)",
+                    f1=0.4, f2=100.0, f3=16.0, f4=16.0, q4=0.63,
+                    f5=2.5, q5=0.8, f6=4.0, q6=0.8, gain=1.024),
     "Wc": Weighting("Wc", "longitudinal x, seat back (ISO 2631-1)",
                     f1=0.4, f2=100.0, f3=8.0, f4=8.0, q4=0.63,
                     f5=None, q5=None, f6=None, q6=None, gain=1.0),

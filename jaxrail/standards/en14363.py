@@ -537,11 +537,12 @@ def assess_file(path, *, wheelset_body=None, **options) -> dict:
     acceleration channels given there have the file's T rows. The result adds
     ``"file": {"path", "status", "rows_used", "wheelset_body"}``.
     :func:`jaxrail.standards.from_result.assess_result` does the same for a
-    :class:`jaxrail.simulation.SimulationResult` in memory.
+    :class:`jaxrail.simulation.SimulationResult` in memory. A ValueError names ``path``
+    when it is missing or not an HDF5 file (:func:`jaxrail.results.open_results`).
     """
-    import h5py
+    from ..results import open_results
 
-    with h5py.File(path, "r") as f:
+    with open_results(path) as f:
         missing = [name for name in REQUIRED_DATASETS if name not in f]
         if missing:
             raise ValueError(f"{path}: missing dataset(s) {', '.join(missing)} (a jaxrail "

@@ -16,10 +16,12 @@ NAMES = ["Wb", "Wc", "Wd", "Wp"]
 
 # The parameters again, typed here from the sources and not from the module, so that a
 # wrong constant there fails: ISO 8041 table in the Larson Davis HVM200 manual (Table
-# 3.1) for Wb, Wc, Wd; PyRidy / comfpy for Wp (f1 = 0: no high-pass).
+# 3.1) for Wc, Wd; PyRidy / comfpy for EN 12299's Wb (their K = 0.4 on an upward step
+# normalised to 1 at 0 Hz is K = 0.4 (4/2.5)^2 = 1.024 in ISO 8041's form, used here)
+# and for Wp (f1 = 0: no high-pass).
 # (f1, f2, f3, f4, Q4, f5, Q5, f6, Q6, K); None: the section is absent.
 TABLE = {
-    "Wb": (0.4, 100, 16, 16, 0.55, 2.5, 0.9, 4, 0.95, 1.024),
+    "Wb": (0.4, 100, 16, 16, 0.63, 2.5, 0.8, 4, 0.8, 1.024),
     "Wc": (0.4, 100, 8, 8, 0.63, None, None, None, None, 1.0),
     "Wd": (0.4, 100, 2, 2, 0.63, None, None, None, None, 1.0),
     "Wp": (None, 100, 2, 2, 0.63, None, None, None, None, 1.0),
@@ -66,19 +68,57 @@ def test_weighting_matches_published_values():
     np.testing.assert_allclose(en12299.weighting_gain("Wd", FREQUENCIES_HZ), wd, rtol=0.01)
     np.testing.assert_allclose(en12299.weighting_gain("Wd", FREQUENCIES_HZ), wd, atol=6e-4)
     # ISO 8041 values at the reference frequency 100 rad/s (15.915 Hz), 4 digits, as
-    # listed by ZETLAB.
+    # listed by ZETLAB. (ISO's Wb there is 0.8126; EN 12299's is not ISO's.)
     f_ref = 100 / (2 * np.pi)
-    for name, value in (("Wb", 0.8126), ("Wc", 0.5145), ("Wd", 0.1261)):
+    for name, value in (("Wc", 0.5145), ("Wd", 0.1261)):
         assert en12299.weighting_gain(name, f_ref) == pytest.approx(value, abs=6e-5)
-    # BS 6841 writes Wb's gain as K = 0.4 on an upward step normalised to 1 at 0 Hz;
-    # ISO 8041 as K = 1.024 on one normalised to (f5/f6)^2 at 0 Hz: the same curve.
-    # Wb over Wd's band-limited shape below the steps (at 0.01 Hz, where both
-    # a-v transitions are 1) is that plateau.
+    # EN 12299's implementations write Wb's gain as K = 0.4 on an upward step
+    # normalised to 1 at 0 Hz; the module as K = 1.024 on one normalised to (f5/f6)^2
+    # at 0 Hz: the same curve. Wb over Wd's band-limited shape below the steps (at
+    # 0.01 Hz, where both a-v transitions are 1) is that plateau.
     plateau = en12299.weighting_gain("Wb", 0.01) / en12299.weighting_gain("Wd", 0.01)
     assert plateau == pytest.approx(0.4, rel=1e-3)
     # Wp has no high-pass: gain 1 at low frequency, unlike Wd.
     assert en12299.weighting_gain("Wp", 0.01) == pytest.approx(1.0, abs=1e-3)
     assert en12299.weighting_gain("Wd", 0.01) < 1e-3
+
+
+def en12299_wb_as_the_sources_write_it(frequency_hz):
+    """EN 12299's Wb H(j 2 pi f) evaluated independently of the module, the four
+    sections as PyRidy (pyridy/processing/comfort.py, ComfortProcessor.Wb) and comfpy
+    (comfpy/filters.py, Wb) write them in descending powers of s: f1 0.4, f2 100,
+    f3 = f4 16, f5 2.5, f6 4 [Hz]; Q1 = 1/sqrt(2), Q4 0.63, Q5 = Q6 0.8; K 0.4 on the
+    upward step K (s^2/w5^2 + s/(Q5 w5) + 1) / (s^2/w6^2 + s/(Q6 w6) + 1)."""
+    w1, w2, w3, w4, w5, w6 = (2 * np.pi * f for f in (0.4, 100.0, 16.0, 16.0, 2.5, 4.0))
+    q1, q4, q5, q6, k = 1 / np.sqrt(2), 0.63, 0.8, 0.8, 0.4
+    sections = [([0, 0, w2**2], [1, w2 / q1, w2**2]),                # low-pass
+                ([1, 0, 0], [1, w1 / q1, w1**2]),                    # high-pass
+                ([0, w4**2 / w3, w4**2], [1, w4 / q4, w4**2]),       # a-v transition
+                ([k / w5**2, k / (q5 * w5), k], [1 / w6**2, 1 / (q6 * w6), 1])]  # step
+    s = 2j * np.pi * np.asarray(frequency_hz, dtype=np.float64)
+    return np.prod([np.polyval(b, s) / np.polyval(a, s) for b, a in sections], axis=0)
+
+
+# |Wb| of EN 12299 at FREQUENCIES_HZ and at 100 rad/s: the function above, 4 digits.
+# ISO 2631-4's Wb (Q4 0.55, Q5 0.9, Q6 0.95), which the module had before, gives 0.3342,
+# 0.3853, 0.4173, 0.8891, 1.0251, 0.8103 and 0.8126: up to 13 % off.
+EN_12299_WB = [0.3354, 0.3911, 0.4367, 0.8218, 1.0559, 0.9183]
+EN_12299_WB_100_RAD_S = 0.9207
+
+
+def test_wb_is_en_12299s_weighting_not_iso_2631_4s():
+    gain = en12299.weighting_gain("Wb", FREQUENCIES_HZ)
+    source = en12299_wb_as_the_sources_write_it(FREQUENCIES_HZ)
+    np.testing.assert_allclose(gain, np.abs(source), rtol=0.01)
+    np.testing.assert_allclose(en12299.weighting_response("Wb", FREQUENCIES_HZ), source,
+                               rtol=0.01)
+    np.testing.assert_allclose(gain, EN_12299_WB, rtol=0.01)
+    np.testing.assert_allclose(gain, EN_12299_WB, atol=6e-5)
+    assert en12299.weighting_gain("Wb", 100 / (2 * np.pi)) == pytest.approx(
+        EN_12299_WB_100_RAD_S, abs=6e-5)
+    # and not ISO 2631-4's curve, which is more than 1 % away at 1, 2, 4, 8 and 16 Hz
+    iso = np.array([0.3342, 0.3853, 0.4173, 0.8891, 1.0251, 0.8103])
+    np.testing.assert_array_less(0.01, np.abs(gain / iso - 1)[1:])
 
 
 @pytest.mark.parametrize("sample_rate_hz", [200.0, 256.0])
@@ -151,15 +191,16 @@ def test_mean_comfort_of_sines_against_hand_computation():
     ax, ay, az = floor_record(fs, 300.0, amplitudes, frequencies, offset_z=9.81)
     result = en12299.mean_comfort(ax, ay, az, fs)
     # Stationary sines: every 5 s rms is amplitude * |W(f)| / sqrt(2), with the
-    # published gains Wd(1 Hz) = 1.011, Wd(2 Hz) = 0.890, Wb(100 rad/s) = 0.8126.
-    a_x, a_y, a_z = (a * w / math.sqrt(2) for a, w in zip(amplitudes, (1.011, 0.890, 0.8126)))
+    # published gains Wd(1 Hz) = 1.011, Wd(2 Hz) = 0.890 and EN 12299's Wb(100 rad/s) =
+    # 0.9207 (EN_12299_WB below).
+    a_x, a_y, a_z = (a * w / math.sqrt(2) for a, w in zip(amplitudes, (1.011, 0.890, 0.9207)))
     assert result.blocks == 60
     assert result.a_x_p95 == pytest.approx(a_x, rel=0.01)
     assert result.a_y_p95 == pytest.approx(a_y, rel=0.01)
     assert result.a_z_p95 == pytest.approx(a_z, rel=0.01)
-    n_mv = 6 * math.sqrt(a_x**2 + a_y**2 + a_z**2)   # 1.81
+    n_mv = 6 * math.sqrt(a_x**2 + a_y**2 + a_z**2)   # 2.11
     assert result.n_mv == pytest.approx(n_mv, rel=0.01)
-    assert result.comfort_class == "comfortable"
+    assert result.comfort_class == "medium"         # 2 <= N_MV < 4
     assert isinstance(result.n_mv, float)
 
 
