@@ -1,5 +1,6 @@
 """Vehicles: wheel-rail coupling of wheelsets, the paper's 11-body trailer, a loaded
-bogie (half of it), a single free wheelset, and their initial static equilibrium."""
+bogie (half of it), a single free wheelset, and their initial static equilibrium;
+any vehicle from a vehicle file (docs/vehicle-files.md)."""
 
 from .bogie import bogie as bogie
 from .initial import initial_state as initial_state
@@ -13,6 +14,9 @@ from .trailer import trailer as trailer
 from .trailer import trailer_values as trailer_values
 from .vehicle import Vehicle as Vehicle
 from .vehicle import VehicleParams as VehicleParams
+from .from_file import vehicle_from_data as vehicle_from_data
+from .from_file import vehicle_from_file as vehicle_from_file
+from .from_file import vehicle_names as vehicle_names
 from .loads import CONTACT_MODELS as CONTACT_MODELS
 from .loads import OnlineContact as OnlineContact
 from .loads import TableContact as TableContact
@@ -36,5 +40,6 @@ __all__ = ["bogie", "contact_loads", "contact_model", "CONTACT_MODELS",
            "read_vehicle_data", "set_values", "simulate_single_wheelset",
            "single_wheelset", "static_loads", "TableContact", "touching_height",
            "trailer", "trailer_values", "Vehicle", "vehicle_accelerations",
+           "vehicle_from_data", "vehicle_from_file", "vehicle_names",
            "VehicleLoads", "VehicleParams", "wheelset_contact_loads", "wheelset_loads",
            "wheelset_rest_pose"]
