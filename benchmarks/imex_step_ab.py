@@ -51,7 +51,8 @@ def compiled_steps(module, q, qdot, data, structure):
         vehicle, params, track, model = eqx.combine(data, structure)
         loads = profile.VehicleLoads(vehicle, params, track, model)
         return module.IMEX().step(diffrax.ODETerm(multibody_rhs), 0.0, profile.IMEX_STEP,
-                                  (q, qdot), (vehicle.system, params.system, loads), None,
+                                  profile.State.of(q, qdot),
+                                  (vehicle.system, params.system, loads), None,
                                   False)[0]
 
     return profile.compiled_loop(step, (q, qdot, data))
@@ -67,8 +68,9 @@ def main():
     vehicle, params, track = scenario.build()
     table, _ = profile.contact_table(params.wheel, params.rail, params.rail_offset,
                                      vehicle.config)
-    q, qdot = jax.jit(lambda p, t: profile.initial_state(
+    start = jax.jit(lambda p, t: profile.initial_state(
         vehicle, p, t, scenario.speed, scenario.misalignment))(params, track)
+    q, qdot = start.q, start.qdot
     out = {"benchmark": "imex_step_ab", "against": args.against, "rounds": args.rounds,
            "load_before": os.getloadavg()}
     for name, model in (("table", profile.TableContact(table)),

@@ -68,7 +68,8 @@ def main():
 
     init_one = median_s(equilibrium, (speeds[0], misalignments[0]), args.repeats)
     init_member = median_s(jax.vmap(equilibrium), (speeds, misalignments), args.repeats) / n
-    q0, qdot0 = jax.jit(jax.vmap(equilibrium))(speeds, misalignments)
+    start = jax.jit(jax.vmap(equilibrium))(speeds, misalignments)
+    q0, qdot0 = start.q, start.qdot
 
     def run_time(steps, batched):
         duration = steps * options.fixed_step

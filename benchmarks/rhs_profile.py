@@ -61,7 +61,7 @@ from jaxrail._hlo_operations import operation_counts
 
 enable_float64()
 
-from jaxrail.multibody import accelerations, rhs as multibody_rhs  # noqa: E402
+from jaxrail.multibody import State, accelerations, rhs as multibody_rhs  # noqa: E402
 from jaxrail.multibody.imex import IMEX, stiff_jacobian  # noqa: E402
 from jaxrail.multibody.system import project_state  # noqa: E402
 from jaxrail.scenarios import load_scenario  # noqa: E402
@@ -159,19 +159,19 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
         if rails is None:
             return vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model)
         loads = VehicleLoads(vehicle, params, track, model)
-        return multibody_rhs(0.0, (q, qdot, rails), (vehicle.system, params.system, loads))
+        return multibody_rhs(0.0, State.of(q, qdot, rails), (vehicle.system, params.system, loads))
 
     @parts_of
     def imex_step(q, qdot, vehicle, params, track, model, rails):
         loads = VehicleLoads(vehicle, params, track, model)
-        y0 = (q, qdot) if rails is None else (q, qdot, rails)
+        y0 = State.of(q, qdot, rails)
         return IMEX().step(diffrax.ODETerm(multibody_rhs), 0.0, IMEX_STEP, y0,
                            (vehicle.system, params.system, loads), None, False)[0]
 
     @parts_of
     def imex_jacobian(q, qdot, vehicle, params, track, model, rails):
         loads = VehicleLoads(vehicle, params, track, model)
-        return stiff_jacobian(vehicle.system, params.system, 0.0, q, qdot, loads, rails)
+        return stiff_jacobian(vehicle.system, params.system, 0.0, State.of(q, qdot, rails), loads)
 
     # a load Jacobian at the start, for a step that keeps it (IMEX's jacobian_every)
     kept = jax.jit(imex_jacobian)(q, qdot, data)[1]
@@ -179,7 +179,7 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
     @parts_of
     def imex_step_kept(q, qdot, vehicle, params, track, model, rails):
         loads = VehicleLoads(vehicle, params, track, model)
-        y0 = (q, qdot) if rails is None else (q, qdot, rails)
+        y0 = State.of(q, qdot, rails)
         solver, term, args = IMEX(jacobian_every=8), diffrax.ODETerm(multibody_rhs), (
             vehicle.system, params.system, loads)
         euler = solver.init(term, 0.0, IMEX_STEP, y0, args)[2]
@@ -254,9 +254,8 @@ def main():
         on = track.with_support(FlexibleTrack() if support == "flexible" else None)
         state = jax.jit(lambda p, t: initial_state(vehicle, p, t, scenario.speed,
                                                    scenario.misalignment))(params, on)
-        rails = state[2] if support == "flexible" else None
-        results[support] = {name: profile_model(model, vehicle, params, on, state[0],
-                                                state[1], rails, args.calls, args.batch)
+        results[support] = {name: profile_model(model, vehicle, params, on, state.q,
+                                                state.qdot, state.track, args.calls, args.batch)
                             for name, model in models.items()}
         ratios["online_over_table"][support] = round(
             results[support]["online"]["rhs_median_us"]

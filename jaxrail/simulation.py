@@ -29,7 +29,8 @@ from ._compiler import compile_function
 from ._lru import LruCache
 from ._progress import SimulatedTimeBar
 from ._time_report import TimeReportingMeter, listening
-from .multibody import accelerations, constraints, simulate_system
+from .multibody import State, accelerations, constraints, simulate_system
+from .multibody import initial_state as system_initial_state
 from .multibody.system import FixedLoads
 from .multibody.imex import IMEX, JacobianCounter, check_jacobian_every
 from .track import to_track_coordinates, track_frame
@@ -259,7 +260,7 @@ def _wheelset_track_coordinates(vehicle, track, q, qdot):
 def _stop_events(vehicle, track, limits, rest_height):
     """The terminating diffrax Event of a run: (derailed, non-finite state)."""
     def derailed(t, y, args, **kwargs):
-        q, qdot = y[0], y[1]
+        q, qdot = y.q, y.qdot
         lateral, _, _, heights, irregularity = _wheelset_track_coordinates(vehicle, track, q,
                                                                            qdot)
         lifted = jnp.any(heights - rest_height > limits.lift)
@@ -284,17 +285,18 @@ def _starts_derailed(limits, lateral0, irregularity0, misalignment):
             | (unknown & (jnp.abs(misalignment) > limits.lateral)))
 
 
-def _outputs(vehicle, params, track, q, qdot, rails, model, t=0.0, drive=None):
+def _outputs(vehicle, params, track, q, qdot, rails, model, t=0.0, drive=None, elements=None):
     """``(WheelOutputs, qddot)`` at one state: the wheel outputs (leading shape (W, 2,
     P)) and the accelerations (7 n,) of eq. (19) with the same loads, from one contact
     evaluation; ``rails``: the flexible track's ``(w, wdot)`` (W, 2, 2), or None;
-    ``drive``: the run's speed drive (its force at time ``t`` [s]), or None."""
+    ``drive``: the run's speed drive (its force at time ``t`` [s]), or None;
+    ``elements``: the force elements' internal states (:class:`State`)."""
     forces_on_bodies, torques, patches, forces = contact_loads(vehicle, params, track, q,
                                                                qdot, model, rails)
     if drive is not None:
         forces_on_bodies = drive.add_to(t, qdot, forces_on_bodies)
     qddot = accelerations(vehicle.system, params.system, 0.0, q, qdot,
-                          FixedLoads(forces_on_bodies, torques))[0]
+                          FixedLoads(forces_on_bodies, torques), elements)[0]
     position, _, _, _ = wheelset_states(vehicle, q, qdot)
     frames = jax.vmap(lambda r: track_frame(track, to_track_coordinates(track, r)[0]))(position)
     side = jnp.array([1.0, -1.0])[None, :]
@@ -313,11 +315,12 @@ def _wheel_outputs(vehicle, params, track, q, qdot, rails, model):
     return _outputs(vehicle, params, track, q, qdot, rails, model)[0]
 
 
-def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t1, ts, options,
-               limits, solver, adjoint, rails0=None, report=False):
-    """diffrax's Solution of eq. (19) from (q0, qdot0) at 0 to t1 [s] with ``solver``,
-    saved at ``ts``, stopped by the derailment event; ``rails0``: a flexible track's
-    rails ``(w, wdot)`` at 0, integrated with the bodies; ``report``: each accepted
+def _integrate(vehicle, params, track, loads, start, rest_heights, t1, ts, options,
+               limits, solver, adjoint, report=False):
+    """diffrax's Solution of eq. (19) from the :class:`State` ``start`` at 0 to t1 [s]
+    with ``solver``, saved at ``ts``, stopped by the derailment event (a flexible
+    track's rails and the elements' internal states are integrated with the bodies);
+    ``report``: each accepted
     step's time to the host (:class:`TimeReportingMeter`). With IMEX the controller
     counts its load Jacobians (:class:`JacobianCounter`, the saved controller state)."""
     controller, dt0 = options.controller()
@@ -325,12 +328,13 @@ def _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t1, ts, o
     if counting:
         controller = JacobianCounter(controller, solver.jacobian_every)
     return simulate_system(
-        vehicle.system, params.system, q0, qdot0, t1, dt0=dt0,
+        vehicle.system, params.system, start.q, start.qdot, t1, dt0=dt0,
         saveat=diffrax.SaveAt(ts=ts, controller_state=counting), rtol=options.rtol,
         atol=options.atol, solver=solver,
         external=loads, max_steps=options.max_steps, adjoint=adjoint, throw=False,
         stepsize_controller=controller,
-        event=_stop_events(vehicle, track, limits, rest_heights), states0=rails0,
+        event=_stop_events(vehicle, track, limits, rest_heights), track0=start.track,
+        elements0=start.elements,
         progress_meter=TimeReportingMeter(t1) if report else None)
 
 
@@ -346,23 +350,25 @@ def _evaluations(solver, sol):
     return sol.stats["num_steps"] * per_step + at_start, jacobians
 
 
-def _results(vehicle, params, track, model, q0, qdot0, rails0, ts, q, qdot, rails, result,
-             derailed, steps, accepted_steps, rejected_steps, evaluations, drive=None):
-    """SimulationResult from the states at the output times (non-finite rows: not
-    reached), without host timings. ``rails0``, ``rails``: a flexible track's rails
-    ``(w, wdot)`` at the start (W, 2, 2) and at the output times (T, W, 2, 2), or None;
+def _results(vehicle, params, track, model, start, ts, saved, result, derailed, steps,
+             accepted_steps, rejected_steps, evaluations, drive=None):
+    """SimulationResult from the :class:`State` ``saved`` at the output times (leading
+    axis T; non-finite rows: not reached) and the ``start``, without host timings.
     ``drive``: the run's speed drive, or None."""
+    q0, qdot0, rails0 = start.q, start.qdot, start.track
+    q, qdot, rails = saved.q, saved.qdot, saved.track
     _, rest_vertical, _, _, _ = _wheelset_track_coordinates(vehicle, track, q0, qdot0)
     valid = jnp.all(jnp.isfinite(q), axis=1) & jnp.all(jnp.isfinite(qdot), axis=1)
     # Outputs after an early stop are recomputed at the initial state and masked.
     safe = lambda x, x0: jnp.where(valid.reshape((-1,) + (1,) * (x.ndim - 1)), x, x0)  # noqa: E731
     q_safe, qdot_safe = safe(q, q0), safe(qdot, qdot0)
     rails_safe = None if rails is None else jax.tree.map(safe, rails, rails0)
+    elements_safe = jax.tree.map(safe, saved.elements, start.elements)
     lateral, vertical, yaw, _, irregularity = jax.vmap(
         lambda a, b: _wheelset_track_coordinates(vehicle, track, a, b))(q_safe, qdot_safe)
     wheels, qddot = jax.lax.map(
-        lambda y: _outputs(vehicle, params, track, *y[1:], model, y[0], drive),
-        (ts, q_safe, qdot_safe, rails_safe))
+        lambda y: _outputs(vehicle, params, track, *y[1:4], model, y[0], drive, y[4]),
+        (ts, q_safe, qdot_safe, rails_safe, elements_safe))
     deflection = (jnp.zeros(lateral.shape + (2, 2), dtype=q.dtype) if rails is None
                   else rails_safe[0])
     n_norm = vehicle.system.n_bodies
@@ -384,35 +390,30 @@ def _results(vehicle, params, track, model, q0, qdot0, rails0, ts, q, qdot, rail
 
 
 def _start(vehicle, params, track, speed, misalignment, s0, initial, model):
-    """(q0, qdot0, rails0): ``initial``, or the static equilibrium; ``rails0``: a
-    flexible track's rails ``(w, wdot)`` (W, 2, 2) [m, m/s], None on rigid rails."""
+    """The :class:`State` a run starts from: ``initial``, or the static equilibrium."""
     if initial is None:
         initial = initial_state(vehicle, params, track, speed, misalignment, s0, model)
-    return _as_state(track, initial)
+    return _as_state(vehicle, params, track, initial)
 
 
-def _as_state(track, initial):
-    """``initial`` = (q0, qdot0[, rails0]) as float64 arrays, checked against the track:
-    a flexible track needs its rails' state, a rigid one has none."""
-    initial = tuple(initial)
-    if len(initial) == 3 and initial[2] is None:
-        initial = initial[:2]
-    initial = jax.tree.map(lambda x: jnp.asarray(x, dtype=jnp.float64), initial)
+def _as_state(vehicle, params, track, initial) -> State:
+    """``initial`` as a float64 :class:`State`, checked against the track: a flexible
+    track needs its rails' state, a rigid one has none. A pair ``(q0, qdot0)`` on rigid
+    rails is taken as the State with the force elements at rest."""
+    if not isinstance(initial, State):
+        q0, qdot0 = initial
+        initial = system_initial_state(vehicle.system, params.system, q0, qdot0)
     flexible = getattr(track, "support", None) is not None
-    if len(initial) != (3 if flexible else 2):
-        raise ValueError(f"initial must be (q0, qdot0{', rails0' if flexible else ''}) on "
-                         f"{'a flexible track' if flexible else 'rigid rails'}, got "
-                         f"{len(initial)} items")
-    return initial if flexible else initial + (None,)
+    if (initial.track is not None) != flexible:
+        raise ValueError(f"initial must {'' if flexible else 'not '}hold the rails' state "
+                         f"(State.track) on {'a flexible track' if flexible else 'rigid rails'}")
+    return State.of(initial.q, initial.qdot, initial.track, initial.elements)
 
 
-def _saved_states(sol, start):
-    """The states (q, qdot, rails) diffrax saved, the first output (t = 0) the start
-    ``(q0, qdot0, rails0)`` itself, so that a run stopped at once keeps it; ``rails``
-    None on rigid rails (``rails0`` None)."""
-    first = lambda saved, x0: saved.at[0].set(x0)  # noqa: E731
-    rails = None if start[2] is None else jax.tree.map(first, sol.ys[2], start[2])
-    return first(sol.ys[0], start[0]), first(sol.ys[1], start[1]), rails
+def _saved_states(sol, start: State) -> State:
+    """The states diffrax saved, the first output (t = 0) the ``start`` itself, so that
+    a run stopped at once keeps it."""
+    return jax.tree.map(lambda saved, x0: saved.at[0].set(x0), sol.ys, start)
 
 
 def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignment=0.0,
@@ -421,8 +422,8 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
           initial=None, contact_model=None, report_progress=False, drive=None):
     """The traceable core of :func:`simulate` (jit, vmap and grad it): returns a
     :class:`SimulationResult` without host timings. ``t1`` [s], ``speed`` [m/s] and
-    ``misalignment`` [m] may be traced. ``initial``: ``(q0, qdot0)`` (and on a flexible
-    track the rails' ``(w, wdot)``) to start from instead of the static equilibrium
+    ``misalignment`` [m] may be traced. ``initial``: a :class:`~jaxrail.multibody.State`
+    (or on rigid rails ``(q0, qdot0)``) to start from instead of the static equilibrium
     (:func:`jaxrail.vehicles.initial_state`); wheel lifts and vertical displacements
     are measured from the initial state. ``contact_model``: :mod:`jaxrail.vehicles.loads`
     (default the paper's search). ``options.progress`` is not used here
@@ -433,20 +434,19 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
     the speed to its programme (default None: the vehicle coasts)."""
     limits = DerailmentLimits() if limits is None else limits
     loads = VehicleLoads(vehicle, params, track, resolve_contact_model(contact_model), drive)
-    q0, qdot0, rails0 = _start(vehicle, params, track, speed, misalignment, s0, initial,
-                               loads.model)
-    lateral0, _, _, rest_heights, irregularity0 = _wheelset_track_coordinates(vehicle, track,
-                                                                              q0, qdot0)
+    start = _start(vehicle, params, track, speed, misalignment, s0, initial, loads.model)
+    lateral0, _, _, rest_heights, irregularity0 = _wheelset_track_coordinates(
+        vehicle, track, start.q, start.qdot)
     ts = jnp.linspace(0.0, t1, options.n_outputs)
     solver = options.solver() if solver is None else solver
-    sol = _integrate(vehicle, params, track, loads, q0, qdot0, rest_heights, t1, ts, options,
-                     limits, solver, adjoint, rails0, report_progress)
+    sol = _integrate(vehicle, params, track, loads, start, rest_heights, t1, ts, options,
+                     limits, solver, adjoint, report_progress)
     # a state that only turned non-finite is not derailed: diffrax's event_occurred
     # result makes the status "failed"
     derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, irregularity0,
                                                     misalignment)
-    return _results(vehicle, params, track, loads.model, q0, qdot0, rails0, ts,
-                    *_saved_states(sol, (q0, qdot0, rails0)), sol.result, derailed,
+    return _results(vehicle, params, track, loads.model, start, ts,
+                    _saved_states(sol, start), sol.result, derailed,
                     sol.stats["num_steps"], sol.stats["num_accepted_steps"],
                     sol.stats["num_rejected_steps"],
                     _evaluations(solver, sol), drive)
@@ -549,7 +549,7 @@ def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: f
     if initial is None:
         initial = timer.run(initial_state, vehicle, params, track, speed, misalignment, s0,
                             contact_model)
-    initial = _as_state(track, initial)
+    initial = _as_state(vehicle, params, track, initial)
     # progress only draws: one program (and one cache entry) with or without the bar
     arguments = (vehicle, params, track, t1, speed, misalignment, s0)
     static = dict(options=dataclasses.replace(options, progress=False), limits=limits,

@@ -22,6 +22,14 @@ from .forces import BumpStop as BumpStop
 from .forces import BumpStopParams as BumpStopParams
 from .forces import SpringDamper as SpringDamper
 from .forces import SpringDamperParams as SpringDamperParams
+from .anti_roll_bar import AntiRollBar as AntiRollBar
+from .anti_roll_bar import AntiRollBarParams as AntiRollBarParams
+from .friction_damper import FrictionDamper as FrictionDamper
+from .friction_damper import FrictionDamperParams as FrictionDamperParams
+from .table_spring import TableSpring as TableSpring
+from .table_spring import TableSpringParams as TableSpringParams
+from .traction_rod import TractionRod as TractionRod
+from .traction_rod import TractionRodParams as TractionRodParams
 from .joints import GROUND as GROUND
 from .joints import Fixed as Fixed
 from .joints import JointParams as JointParams
@@ -44,9 +52,18 @@ from .system import mass_matrix as mass_matrix
 from .system import potential_energy as potential_energy
 from .system import quadratic_velocity as quadratic_velocity
 from .system import rhs as rhs
+from .system import dissipated_power as dissipated_power
+from .system import element_rates as element_rates
+from .system import initial_element_states as initial_element_states
+from .system import initial_state as initial_state
+from .state import State as State
+from .elements_series import AirSpring as AirSpring
+from .elements_series import MaxwellDamper as MaxwellDamper
 from .system import simulate_system as simulate_system
 
-__all__ = ["acceleration_response", "accelerations", "accelerations_dense",
+__all__ = ["acceleration_response", "accelerations", "accelerations_dense", "AirSpring",
+           "dissipated_power", "element_rates", "initial_element_states", "initial_state",
+           "MaxwellDamper", "State",
            "angular_momentum", "angular_velocity", "body_pose", "BodyParams",
            "build_system", "BumpStop", "BumpStopParams", "Bushing", "BushingParams",
            "consistent_initial_conditions", "constraint_violation", "constraints",
@@ -55,4 +72,6 @@ __all__ = ["acceleration_response", "accelerations", "accelerations_dense",
            "potential_energy", "Prismatic", "quadratic_velocity", "quaternion",
            "Revolute", "rhs", "RigidBody", "simulate_system", "Spherical",
            "split_coordinates", "SpringDamper", "SpringDamperParams", "System",
-           "SystemParams", "velocities_from_twists"]
+           "SystemParams", "velocities_from_twists",
+           "AntiRollBar", "AntiRollBarParams", "FrictionDamper", "FrictionDamperParams",
+           "TableSpring", "TableSpringParams", "TractionRod", "TractionRodParams"]

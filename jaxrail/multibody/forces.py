@@ -36,7 +36,11 @@ from jaxtyping import Array, Float
 
 from .._tracing import traced_once
 from . import quaternion as qt
+from . import anti_roll_bar, friction_damper, table_spring, traction_rod
 from ._values import checked_vector, float64_array
+from .element_geometry import line_length
+from .elements_series import series_kinds
+from .element_geometry import separation as _separation
 from .joints import _check_frame, body_selector, ground_extended, place_bodies, select_bodies
 
 
@@ -179,19 +183,8 @@ class BumpStopParams(eqx.Module):
 # ---- one element: deformation coordinates, law, potential ---------------------
 
 
-def _separation(qi, qj, e):
-    """(A_i, A_j, d = r_Pj - r_Pi (3,) [m], global) of one element's two points."""
-    a_i, a_j = qt.rotation_matrix(qi[3:]), qt.rotation_matrix(qj[3:])
-    d = qj[:3] + qt.matvec(a_j, e.point_j) - qi[:3] - qt.matvec(a_i, e.point_i)
-    return a_i, a_j, d
-
-
 def _spring_coords(qi, qj, e):
-    _, _, d = _separation(qi, qj, e)
-    d2 = qt.dot(d, d)[None]
-    pos = d2 > 0.0
-    # At zero length the direction is undefined: no force (zero derivative).
-    return jnp.where(pos, jnp.sqrt(jnp.where(pos, d2, 1.0)), 0.0)
+    return line_length(qi, qj, e)
 
 
 def _spring_law(s, sdot, e):
@@ -333,6 +326,16 @@ FORCE_KINDS = {
                          _bushing_power),
     "bump_stop": ForceKind(_bump_coords, _bump_law, _bump_potential, _bump_params,
                            _bump_power),
+    **series_kinds(ForceKind),
+    "table_spring": ForceKind(_bump_coords, table_spring.law, table_spring.potential,
+                              table_spring.params, table_spring.power),
+    "anti_roll_bar": ForceKind(anti_roll_bar.coordinates, anti_roll_bar.law,
+                               anti_roll_bar.potential, anti_roll_bar.params,
+                               anti_roll_bar.power),
+    "friction_damper": ForceKind(_bump_coords, friction_damper.law, friction_damper.potential,
+                                 friction_damper.params, friction_damper.power),
+    "traction_rod": ForceKind(_spring_coords, _spring_law, _spring_potential,
+                              traction_rod.params, _spring_power),
 }
 
 
@@ -341,48 +344,113 @@ def element_deformation(kind: str, qi, qj, e) -> Array:
     return FORCE_KINDS[kind].coordinates(qi, qj, e)
 
 
-def _one_element(kind, qi, qj, vi, vj, e):
-    """Generalized forces (g_i (7,), g_j (7,)) of one element: -(ds/dq)^T F(s, sdot),
-    sdot and the transpose product by forward and reverse AD of s(q_i, q_j)."""
-    coords, law = FORCE_KINDS[kind].coordinates, FORCE_KINDS[kind].law
+def _law_and_rate(kind, s, sdot, e, z):
+    """(F, zdot) of one element at deformation s, rate sdot and internal states z
+    (zdot None for a kind without internal states)."""
+    k = FORCE_KINDS[kind]
+    if k.states == 0:
+        return k.law(s, sdot, e), None
+    return k.law(s, sdot, e, z), k.rate(s, sdot, e, z)
+
+
+def _one_element(kind, qi, qj, vi, vj, e, z=None):
+    """(g_i (7,), g_j (7,), zdot) of one element: -(ds/dq)^T F(s, sdot[, z]), sdot and
+    the transpose product by forward and reverse AD of s(q_i, q_j)."""
+    coords = FORCE_KINDS[kind].coordinates
 
     def s_of(qi, qj):
         return coords(qi, qj, e)
 
     s, pullback = jax.vjp(s_of, qi, qj)
     sdot = jax.jvp(s_of, (qi, qj), (vi, vj))[1]
-    gi, gj = pullback(-law(s, sdot, e))
+    force, zdot = _law_and_rate(kind, s, sdot, e, z)
+    gi, gj = pullback(-force)
     gi = jnp.concatenate([gi[:3], _tangent(qi[3:], gi[3:])])
     gj = jnp.concatenate([gj[:3], _tangent(qj[3:], gj[3:])])
-    return gi, gj
+    return gi, gj, zdot
+
+
+def _pairs(body_i, body_j, x_ext):
+    """The rows (k, 7) of x_ext (n + 1, 7) (row n: the ground's) of the elements'
+    bodies i and j."""
+    n = x_ext.shape[0] - 1
+    return (select_bodies(body_selector(body_i, n), x_ext),
+            select_bodies(body_selector(body_j, n), x_ext))
+
+
+def _coordinate_pairs(body_i, body_j, q):
+    """The coordinates (k, 7) of the elements' bodies i and j (the ground at rest at the
+    origin) from q (7 n,)."""
+    return _pairs(body_i, body_j, ground_extended(q.reshape(-1, 7)))
+
+
+def _velocity_pairs(body_i, body_j, qdot):
+    """The velocities (k, 7) of the elements' bodies i and j (the ground's zero)."""
+    v = qdot.reshape(-1, 7)
+    return _pairs(body_i, body_j, jnp.concatenate([v, jnp.zeros((1, 7), dtype=v.dtype)]))
 
 
 @traced_once
-def element_forces(kind: str, body_i, body_j, e, q, qdot) -> Float[Array, " 7n"]:
-    """Summed generalized forces (7 n,) of the k elements of one kind.
+def element_loads(kind: str, body_i, body_j, e, q, qdot, z=None):
+    """(g (7 n,), zdot (k, r) or None): the summed generalized forces of the k elements
+    of one kind and the rates of their internal states.
 
     body_i, body_j: static int sequences (k,), -1 for ground; e: the kind's params
-    with leading axis k; q, qdot (7 n,).
+    with leading axis k; q, qdot (7 n,); z (k, r): the internal states of a kind that
+    has r of them (None otherwise).
     """
     n = q.shape[0] // 7
     sel_i, sel_j = body_selector(body_i, n), body_selector(body_j, n)
-    q_ext = ground_extended(q.reshape(n, 7))
-    v_ext = jnp.concatenate([qdot.reshape(n, 7), jnp.zeros((1, 7))], axis=0)
-    gi, gj = jax.vmap(lambda a, b, c, d, p: _one_element(kind, a, b, c, d, p))(
-        select_bodies(sel_i, q_ext), select_bodies(sel_j, q_ext),
-        select_bodies(sel_i, v_ext), select_bodies(sel_j, v_ext), e,
-    )
+    q_i, q_j = _coordinate_pairs(body_i, body_j, q)
+    v_i, v_j = _velocity_pairs(body_i, body_j, qdot)
+    if FORCE_KINDS[kind].states == 0:
+        gi, gj, _ = jax.vmap(lambda a, b, c, d, p: _one_element(kind, a, b, c, d, p))(
+            q_i, q_j, v_i, v_j, e)
+        zdot = None
+    else:
+        gi, gj, zdot = jax.vmap(lambda a, b, c, d, p, w: _one_element(kind, a, b, c, d, p, w))(
+            q_i, q_j, v_i, v_j, e, z)
     g = jnp.sum(place_bodies(sel_i, gi) + place_bodies(sel_j, gj), axis=0)
-    return g[:n].reshape(-1)
+    return g[:n].reshape(-1), zdot
 
 
-def element_potential(kind: str, body_i, body_j, e, q) -> Float[Array, ""]:
-    """Summed stored energy [J] of the k elements of one kind (dampers excluded)."""
-    n = q.shape[0] // 7
+def element_forces(kind: str, body_i, body_j, e, q, qdot, z=None) -> Float[Array, " 7n"]:
+    """Summed generalized forces (7 n,) of the k elements of one kind
+    (:func:`element_loads`)."""
+    return element_loads(kind, body_i, body_j, e, q, qdot, z)[0]
+
+
+def element_potential(kind: str, body_i, body_j, e, q, z=None) -> Float[Array, ""]:
+    """Summed stored energy [J] of the k elements of one kind (dampers excluded);
+    z (k, r): the internal states of a kind that has them."""
     coords, potential = FORCE_KINDS[kind].coordinates, FORCE_KINDS[kind].potential
-    q_ext = ground_extended(q.reshape(n, 7))
-    v = jax.vmap(lambda a, b, p: potential(coords(a, b, p), p))(
-        select_bodies(body_selector(body_i, n), q_ext),
-        select_bodies(body_selector(body_j, n), q_ext), e,
-    )
+    q_i, q_j = _coordinate_pairs(body_i, body_j, q)
+    if FORCE_KINDS[kind].states == 0:
+        v = jax.vmap(lambda a, b, p: potential(coords(a, b, p), p))(q_i, q_j, e)
+    else:
+        v = jax.vmap(lambda a, b, p, w: potential(coords(a, b, p), p, w))(q_i, q_j, e, z)
     return jnp.sum(v)
+
+
+def element_initial_states(kind: str, body_i, body_j, e, q) -> Float[Array, "k r"]:
+    """The internal states (k, r) of the elements of a kind that has them, at rest at q
+    (7 n,): each element unloaded through its internal states (``ForceKind.initial``)."""
+    coords, initial = FORCE_KINDS[kind].coordinates, FORCE_KINDS[kind].initial
+    q_i, q_j = _coordinate_pairs(body_i, body_j, q)
+    return jax.vmap(lambda a, b, p: initial(coords(a, b, p), p))(q_i, q_j, e)
+
+
+def element_power(kind: str, body_i, body_j, e, q, qdot, z=None) -> Float[Array, ""]:
+    """Summed power [W] the k elements of one kind dissipate (0 for a kind that
+    dissipates none); z (k, r): the internal states of a kind that has them."""
+    k = FORCE_KINDS[kind]
+    if k.power is None:
+        return jnp.zeros((), dtype=q.dtype)
+    q_i, q_j = _coordinate_pairs(body_i, body_j, q)
+    v_i, v_j = _velocity_pairs(body_i, body_j, qdot)
+
+    def one(a, b, c, d, p, *w):
+        s, sdot = jax.jvp(lambda x, y: k.coordinates(x, y, p), (a, b), (c, d))
+        return k.power(s, sdot, p, *w)
+    extra = () if k.states == 0 else (z,)
+    return jnp.sum(jax.vmap(one)(q_i, q_j, v_i, v_j, e, *extra))

@@ -51,7 +51,9 @@ import numpy as np
 
 from ._when import computed_when, zeros_of
 from .quaternion import multiply
-from .system import FixedLoads, acceleration_response, accelerations, project_state, rhs
+from .state import State
+from .system import (FixedLoads, acceleration_response, accelerations, element_rates,
+                     project_state, rhs)
 
 METHODS = {"KenCarp3": 3, "KenCarp4": 4, "KenCarp5": 5}
 
@@ -78,10 +80,12 @@ class StiffJacobian(eqx.Module):
         return np.asarray(self.columns, dtype=int).reshape(k, -1)[:, 3:7]
 
     def matvec(self, x):
-        """J x for x = (x_q, x_v)."""
-        x_q, x_v = x
+        """J x for x = (x_q, x_v, x_z) (x_z: explicit states, J's rows and columns
+        zero)."""
+        x_q, x_v, x_z = x
         index = np.asarray(self.columns, dtype=int)
-        return x_v, self.a_q @ x_q[index] + self.a_v @ x_v[index]
+        return (x_v, self.a_q @ x_q[index] + self.a_v @ x_v[index],
+                jax.tree.map(jnp.zeros_like, x_z))
 
     def factor(self, hg):
         """The pieces of (I - hg J)^-1: with B = hg A_v + hg^2 A_q (columns c only),
@@ -129,19 +133,19 @@ class StiffJacobian(eqx.Module):
         return StiffJacobian(self.columns, carried(self.a_q), carried(self.a_v), k)
 
     def solve(self, hg, factored, rhs_):
-        """x = (I - hg J)^-1 rhs_ for rhs_ = (b_q, b_v), with ``factored`` from
-        :meth:`factor` for the same hg."""
-        b_q, b_v = rhs_
+        """x = (I - hg J)^-1 rhs_ for rhs_ = (b_q, b_v, b_z), with ``factored`` from
+        :meth:`factor` for the same hg (x_z = b_z: J is zero on the explicit states)."""
+        b_q, b_v, b_z = rhs_
         b, inverse = factored
         index = np.asarray(self.columns, dtype=int)
         r = b_v + hg * (self.a_q @ b_q[index])
         x_c = inverse @ r[index]
         x_v = r + b @ x_c
-        return b_q + hg * x_v, x_v
+        return b_q + hg * x_v, x_v, b_z
 
 
-def stiff_jacobian(system, params, t, q, qdot, external, states=None, jacobian=True):
-    """(f(y) = (qdot, qddot), :class:`StiffJacobian`) at y = (q, qdot).
+def stiff_jacobian(system, params, t, y: State, external, jacobian=True):
+    """(f(y) packed (:func:`_pack`), :class:`StiffJacobian`) at the :class:`State` y.
 
     ``jacobian``: a bool, which may be traced, or a tuple of them that must all hold
     (:func:`~jaxrail.multibody._when.computed_when`): where it is False, J's entries are
@@ -156,24 +160,28 @@ def stiff_jacobian(system, params, t, q, qdot, external, states=None, jacobian=T
     generalized load with respect to its own (q, qdot) (7 + 7 coordinates). The contact
     is evaluated once for both. Without it, J = 0.
 
-    With further states ``states = (x, xdot)`` (second order, (k, ...) per stiff body,
-    e.g. a flexible track's rails), ``external.linearised(t, q, qdot, states)`` returns
-    ``(forces, torques, states_dot, bodies, blocks, state_rows)``: ``blocks`` (k, 7, 2
-    (7 + r)) and ``state_rows`` (k, r, 2 (7 + r)) the derivatives of each body's load
-    and of its r states' accelerations by its (q, x, qdot, xdot); f and J are then those
-    of the packed state (:func:`_pack`)."""
-    if states is None:
-        if external is None or not hasattr(external, "linearised"):
-            n7 = q.shape[0]
-            empty = jnp.zeros((n7, 0), dtype=q.dtype)
-            return rhs(t, (q, qdot), (system, params, external)), StiffJacobian((), empty, empty)
-        forces, torques, bodies, blocks = external.linearised(t, q, qdot, jacobian=jacobian)
+    With a flexible track ``y.track = (x, xdot)`` (second order, (k, ...) per stiff
+    body), ``external.linearised(t, q, qdot, track)`` returns ``(forces, torques,
+    track_dot, bodies, blocks, state_rows)``: ``blocks`` (k, 7, 2 (7 + r)) and
+    ``state_rows`` (k, r, 2 (7 + r)) the derivatives of each body's load and of its r
+    states' accelerations by its (q, x, qdot, xdot). The force elements' internal
+    states are explicit: J is zero on them."""
+    q, qdot, track = y.q, y.qdot, y.track
+    linearised = getattr(external, "linearised", None)
+    if linearised is None:
+        n7 = q.shape[0]
+        empty = jnp.zeros((n7, 0), dtype=q.dtype)
+        return _pack(rhs(t, y, (system, params, external))), StiffJacobian((), empty, empty)
+    if track is None:
+        forces, torques, bodies, blocks = linearised(t, q, qdot, jacobian=jacobian)
         state_rows = jnp.zeros(blocks.shape[:1] + (0, 14), dtype=q.dtype)
-        f_states = None
+        f_track = None
     else:
-        forces, torques, f_states, bodies, blocks, state_rows = external.linearised(
-            t, q, qdot, states, jacobian=jacobian)
-    qddot, _ = accelerations(system, params, t, q, qdot, FixedLoads(forces, torques))
+        forces, torques, f_track, bodies, blocks, state_rows = linearised(
+            t, q, qdot, track, jacobian=jacobian)
+    qddot, _ = accelerations(system, params, t, q, qdot, FixedLoads(forces, torques),
+                             y.elements)
+    f_elements = element_rates(system, params, q, qdot, y.elements)
     k, r = len(bodies), state_rows.shape[1]
     n7 = q.shape[0]
 
@@ -191,7 +199,7 @@ def stiff_jacobian(system, params, t, q, qdot, external, states=None, jacobian=T
     columns = tuple(c for block in columns for c in block)
     a_q = response[:, :, :half].reshape(n7 + k * r, -1)
     a_v = response[:, :, half:].reshape(n7 + k * r, -1)
-    f = (qdot, qddot) if states is None else _pack((qdot, qddot, f_states))
+    f = _pack(State(qdot, qddot, f_track, f_elements))
     return f, StiffJacobian(columns, a_q, a_v, k)
 
 
@@ -209,34 +217,37 @@ def _twist(then, now):
     return t / jnp.linalg.norm(t, axis=1, keepdims=True)
 
 
-def _pack(y):
-    """y = (q, qdot[, (x, xdot)]) as (positions, velocities): q and x raveled after it,
-    qdot and xdot likewise."""
-    if len(y) == 2:
-        return y
-    q, qdot, (x, xdot) = y
-    return jnp.concatenate([q, x.ravel()]), jnp.concatenate([qdot, xdot.ravel()])
+def _pack(y: State):
+    """A :class:`State` as (positions, velocities, elements): the track's x raveled
+    after q, its xdot after qdot, and the force elements' internal states (explicit)."""
+    if y.track is None:
+        return y.q, y.qdot, y.elements
+    x, xdot = y.track
+    return (jnp.concatenate([y.q, x.ravel()]), jnp.concatenate([y.qdot, xdot.ravel()]),
+            y.elements)
 
 
-def _unpack(like, packed):
+def _unpack(like: State, packed) -> State:
     """The inverse of :func:`_pack` for states shaped as ``like``."""
-    if len(like) == 2:
-        return packed
-    n, shape = like[0].shape[0], like[2][0].shape
-    positions, velocities = packed
-    return (positions[:n], velocities[:n],
-            (positions[n:].reshape(shape), velocities[n:].reshape(shape)))
+    positions, velocities, elements = packed
+    if like.track is None:
+        return State(positions, velocities, None, elements)
+    n, shape = like.q.shape[0], like.track[0].shape
+    return State(positions[:n], velocities[:n],
+                 (positions[n:].reshape(shape), velocities[n:].reshape(shape)), elements)
 
 
 def _dense_info(h, y0, y1, f0):
-    """Cubic Hermite data for output between steps: q from q and qdot at both ends
-    (exact derivatives: a spinning wheelset's Euler parameters stay on their sphere to
-    O(h^4), where linear interpolation shortens them by theta^2 / 32 and moves its
-    wheel points by tens of micrometres), qdot from the parabola through qdot0, qdot1
-    with slope qddot0 (``f0`` = (qdot0, qddot0))."""
-    (q0, v0), (q1, v1), (_, a0) = y0, y1, f0
-    k0 = (h * v0, h * a0)
-    k1 = (h * v1, 2.0 * (v1 - v0) - h * a0)
+    """Cubic Hermite data for output between steps, of packed states: q from q and
+    qdot at both ends (exact derivatives: a spinning wheelset's Euler parameters stay
+    on their sphere to O(h^4), where linear interpolation shortens them by theta^2 / 32
+    and moves its wheel points by tens of micrometres), qdot from the parabola through
+    qdot0, qdot1 with slope qddot0 (``f0`` = (qdot0, qddot0, zdot0)), the elements'
+    internal states linear between the ends."""
+    (q0, v0, z0), (q1, v1, z1), (_, a0, _) = y0, y1, f0
+    dz = jax.tree.map(jnp.subtract, z1, z0)
+    k0 = (h * v0, h * a0, dz)
+    k1 = (h * v1, 2.0 * (v1 - v0) - h * a0, dz)
     return dict(y0=y0, y1=y1, k0=k0, k1=k1)
 
 
@@ -349,9 +360,8 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         like = y0
 
         def jacobian_at(y):
-            y = _unpack(like, y)
-            return stiff_jacobian(system, params, t0, y[0], y[1], rest[0] if rest else None,
-                                  y[2] if len(y) == 3 else None)[1]
+            return stiff_jacobian(system, params, t0, _unpack(like, y),
+                                  rest[0] if rest else None)[1]
         jac = zeros_of(jax.eval_shape(jacobian_at, _pack(y0)))
         return jac, jnp.asarray(self.jacobian_every, jnp.int32), _euler(jac, _pack(y0)[0])
 
@@ -367,11 +377,8 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
 
         def evaluate(i, y):
             """(f(y), J) at stage i: J (computed at the first stage only) at y0."""
-            y = _unpack(like, y)
-            f, jac = stiff_jacobian(system, params, t0 + c[i] * h, y[0], y[1], external,
-                                    y[2] if len(y) == 3 else None,
-                                    jacobian=(i == 0, refresh))
-            return _pack(f), jac
+            return stiff_jacobian(system, params, t0 + c[i] * h, _unpack(like, y), external,
+                                  jacobian=(i == 0, refresh))
 
         # per stage i: rows i and s + i hold the explicit part f(Y_i) - J (Y_i - y0) and
         # the implicit part J (Y_i - y0) (zero at the first stage, Y_0 = y0), so that each
@@ -418,7 +425,7 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         # 1 um over the paper's curve (Tsit5's shorter steps: nm); one projection per
         # step keeps them at the explicit method's level.
         y1 = _unpack(like, y1)
-        y1 = project_state(system, params, y1[0], y1[1]) + y1[2:]
+        y1 = y1.with_bodies(*project_state(system, params, y1.q, y1.qdot))
         error = _unpack(like, jax.tree.map(lambda d: h * d,
                                            _weighted(both(b_error), parts)))
         # An inverse that is not finite (a non-finite or singular I - h gamma J) ends

@@ -35,6 +35,7 @@ from . import forces as fc
 from . import joints as jt
 from . import quaternion as qt
 from ._values import checked_vector, float64_array
+from .state import State
 
 
 @dataclasses.dataclass(frozen=True)
@@ -208,18 +209,36 @@ def constraints(system: System, params: SystemParams, q, qdot):
     return tuple(jnp.concatenate(x, axis=0) for x in zip(*parts))
 
 
+def stateful_groups(system: System) -> tuple[Group, ...]:
+    """The force groups whose kind has internal states (``State.elements``' keys)."""
+    return tuple(g for g in system.force_groups if fc.FORCE_KINDS[g.kind].states > 0)
+
+
+def _element_states(system, elements, kind):
+    """The internal states (k, r) of ``kind``'s elements, or None for a stateless kind
+    (ValueError if a stateful kind's are missing)."""
+    if fc.FORCE_KINDS[kind].states == 0:
+        return None
+    if elements is None or kind not in elements:
+        raise ValueError(f"the {kind} elements have internal states: pass them "
+                         f"(State.elements[{kind!r}], :func:`initial_element_states`)")
+    return elements[kind]
+
+
 def generalized_forces(system: System, params: SystemParams, t, q, qdot,
-                       external=None) -> Array:
+                       external=None, elements=None) -> Array:
     """Applied generalized forces g (7 n,): gravity, force elements and `external`.
 
     external: None or a callable (t, q, qdot) -> (forces (n, 3) [N], torques (n, 3)
     [N m]), global, applied at the centres of mass (an equinox Module carrying its own
-    parameters keeps them differentiable).
+    parameters keeps them differentiable). elements: the force elements' internal
+    states ``{kind: (k, r)}`` (:class:`State`), where the system has such elements.
     """
     g = fc.gravity_forces(params.bodies.mass, params.gravity, system.n_bodies)
     for grp in system.force_groups:
         g = g + fc.element_forces(grp.kind, grp.body_i, grp.body_j,
-                                  params.forces[grp.kind], q, qdot)
+                                  params.forces[grp.kind], q, qdot,
+                                  _element_states(system, elements, grp.kind))
     if external is not None:
         forces, torques = external(t, q, qdot)
         n = system.n_bodies
@@ -230,6 +249,29 @@ def generalized_forces(system: System, params: SystemParams, t, q, qdot,
     return g
 
 
+def element_rates(system: System, params: SystemParams, q, qdot, elements) -> dict:
+    """``{kind: (k, r)}``: the rates of the force elements' internal states."""
+    return {g.kind: fc.element_loads(g.kind, g.body_i, g.body_j, params.forces[g.kind], q,
+                                     qdot, elements[g.kind])[1]
+            for g in stateful_groups(system)}
+
+
+def initial_element_states(system: System, params: SystemParams, q) -> dict:
+    """``{kind: (k, r)}``: the force elements' internal states at rest at q (7 n,), each
+    element unloaded through them (``forces.ForceKind.initial``)."""
+    q = jnp.asarray(q, dtype=jnp.float64)
+    return {g.kind: fc.element_initial_states(g.kind, g.body_i, g.body_j,
+                                              params.forces[g.kind], q)
+            for g in stateful_groups(system)}
+
+
+def initial_state(system: System, params: SystemParams, q, qdot, track=None) -> State:
+    """The :class:`State` (q, qdot) with the flexible track's rails ``track`` (or None)
+    and the force elements' internal states at rest at q."""
+    q = jnp.asarray(q, dtype=jnp.float64)
+    return State.of(q, qdot, track, initial_element_states(system, params, q))
+
+
 def _check_state(system, q, qdot):
     shape = (7 * system.n_bodies,)
     for name, x in (("q", q), ("qdot", qdot)):
@@ -237,10 +279,10 @@ def _check_state(system, q, qdot):
             raise ValueError(f"{name} must have shape {shape} (7 per body), got {x.shape}")
 
 
-def _right_hand_sides(system, params, t, q, qdot, external):
+def _right_hand_sides(system, params, t, q, qdot, external, elements=None):
     """(g + h (7 n,), rhs_bottom (m,), phi_q (m, 7 n)) of eq. (19)."""
     phi, phi_q, phidot, gamma = constraints(system, params, q, qdot)
-    rhs_top = generalized_forces(system, params, t, q, qdot, external)
+    rhs_top = generalized_forces(system, params, t, q, qdot, external, elements)
     rhs_top = rhs_top + quadratic_velocity(system, params, q, qdot)
     alpha, beta = params.baumgarte_alpha, params.baumgarte_beta
     rhs_bottom = gamma - 2.0 * alpha * phidot - beta**2 * phi
@@ -348,8 +390,10 @@ def _augmented_solve(mass, phi_q, rhs_top, rhs_bottom):
     return sol[: mass.shape[0]], sol[mass.shape[0]:]
 
 
-def accelerations(system: System, params: SystemParams, t, q, qdot, external=None):
-    """(qddot (7 n,), lambda (m,)) from eq. (19) with Baumgarte stabilisation.
+def accelerations(system: System, params: SystemParams, t, q, qdot, external=None,
+                  elements=None):
+    """(qddot (7 n,), lambda (m,)) from eq. (19) with Baumgarte stabilisation;
+    ``elements``: the force elements' internal states (:func:`generalized_forces`).
 
     Solved per body and on the joint rows only (`_lean_solve`), never with the dense
     augmented matrix; `accelerations_dense` is the same with the dense solve.
@@ -357,18 +401,20 @@ def accelerations(system: System, params: SystemParams, t, q, qdot, external=Non
     q = jnp.asarray(q, dtype=jnp.float64)
     qdot = jnp.asarray(qdot, dtype=jnp.float64)
     _check_state(system, q, qdot)
-    rhs_top, rhs_bottom, phi_q = _right_hand_sides(system, params, t, q, qdot, external)
+    rhs_top, rhs_bottom, phi_q = _right_hand_sides(system, params, t, q, qdot, external,
+                                                   elements)
     return _lean_solve(params, q, rhs_top, rhs_bottom, phi_q)
 
 
 def accelerations_dense(system: System, params: SystemParams, t, q, qdot,
-                        external=None):
+                        external=None, elements=None):
     """`accelerations` by the dense LU solve of the augmented matrix [[M, Phi_q^T],
     [Phi_q, 0]] (the reference: slower, same result)."""
     q = jnp.asarray(q, dtype=jnp.float64)
     qdot = jnp.asarray(qdot, dtype=jnp.float64)
     _check_state(system, q, qdot)
-    rhs_top, rhs_bottom, phi_q = _right_hand_sides(system, params, t, q, qdot, external)
+    rhs_top, rhs_bottom, phi_q = _right_hand_sides(system, params, t, q, qdot, external,
+                                                   elements)
     return _augmented_solve(mass_matrix(system, params, q), phi_q, rhs_top, rhs_bottom)
 
 
@@ -383,22 +429,23 @@ class FixedLoads(eqx.Module):
         return self.forces, self.torques
 
 
-def rhs(t, y, args):
-    """diffrax vector field, args = (system, params[, external]).
+def rhs(t, y: State, args) -> State:
+    """diffrax vector field of a :class:`State`, args = (system, params[, external]).
 
-    ``y = (q, qdot)``: the bodies' coordinates and velocities; or ``y = (q, qdot,
-    states)`` with further states that are not rigid bodies (a flexible track's rails):
-    then ``external.coupled(t, q, qdot, states)`` returns the bodies' loads (forces,
-    torques (n, 3)) and the states' derivatives (same structure as ``states``)."""
+    Where the state has a flexible track (``y.track``), ``external.coupled(t, q, qdot,
+    track)`` returns the bodies' loads (forces, torques (n, 3)) and the track's
+    derivatives (the structure of ``y.track``); otherwise ``external(t, q, qdot)``
+    returns the loads. The force elements' internal states move at their kinds' rates.
+    """
     system, params, *rest = args
     external = rest[0] if rest else None
-    q, qdot = y[0], y[1]
-    if len(y) == 2:
-        qddot, _ = accelerations(system, params, t, q, qdot, external)
-        return qdot, qddot
-    forces, torques, states_dot = external.coupled(t, q, qdot, y[2])
-    qddot, _ = accelerations(system, params, t, q, qdot, FixedLoads(forces, torques))
-    return qdot, qddot, states_dot
+    q, qdot = y.q, y.qdot
+    track_dot = None
+    if y.track is not None:
+        forces, torques, track_dot = external.coupled(t, q, qdot, y.track)
+        external = FixedLoads(forces, torques)
+    qddot, _ = accelerations(system, params, t, q, qdot, external, y.elements)
+    return State(qdot, qddot, track_dot, element_rates(system, params, q, qdot, y.elements))
 
 
 # ---- diagnostics --------------------------------------------------------------------
@@ -421,14 +468,23 @@ def kinetic_energy(system: System, params: SystemParams, q, qdot) -> Array:
 
 
 @eqx.filter_jit
-def potential_energy(system: System, params: SystemParams, q) -> Array:
-    """Gravity (-m g . r) plus the energy stored in the force elements [J]."""
+def potential_energy(system: System, params: SystemParams, q, elements=None) -> Array:
+    """Gravity (-m g . r) plus the energy stored in the force elements [J];
+    ``elements``: their internal states, where the system has such elements."""
     r, _ = bd.split_coordinates(q)
     v = -jnp.sum(params.bodies.mass * (r @ params.gravity))
     for g in system.force_groups:
-        v = v + fc.element_potential(g.kind, g.body_i, g.body_j,
-                                     params.forces[g.kind], q)
+        v = v + fc.element_potential(g.kind, g.body_i, g.body_j, params.forces[g.kind], q,
+                                     _element_states(system, elements, g.kind))
     return v
+
+
+@eqx.filter_jit
+def dissipated_power(system: System, params: SystemParams, q, qdot, elements=None) -> Array:
+    """The power [W] the force elements dissipate at this state (>= 0)."""
+    return sum((fc.element_power(g.kind, g.body_i, g.body_j, params.forces[g.kind], q, qdot,
+                                 _element_states(system, elements, g.kind))
+                for g in system.force_groups), jnp.zeros((), dtype=jnp.float64))
 
 
 @eqx.filter_jit
@@ -487,20 +543,23 @@ def simulate_system(system: System, params: SystemParams, q0, qdot0, t1, dt0=1e-
                     saveat=None, rtol=1e-8, atol=1e-8, solver=None, t0=0.0,
                     external=None, max_steps=100_000, adjoint=None, throw=True,
                     stepsize_controller=None, event=None, progress_meter=None,
-                    states0=None):
+                    track0=None, elements0=None):
     """Integrate eq. (19) with diffrax from (q0, qdot0) at t0 [s] to t1 [s].
 
-    Returns diffrax's Solution, with ys = (q (..., 7 n), qdot (..., 7 n)) at `saveat`
-    (default: t1 only), and the further states after them when ``states0`` (a pytree
-    of arrays, integrated with the bodies through ``external.coupled``, :func:`rhs`)
-    is given. solver defaults to Tsit5; stepsize_controller to a
-    PIDController with rtol, atol (pass diffrax.ConstantStepSize() for fixed steps
-    dt0); adjoint to RecursiveCheckpointAdjoint (reverse-mode AD works). event and
-    progress_meter are passed to diffrax (a terminating diffrax.Event, a progress meter).
+    Returns diffrax's Solution, with ys a :class:`State` (q (..., 7 n), qdot (..., 7
+    n), ...) at `saveat` (default: t1 only). ``track0``: a flexible track's rails at t0
+    (a pytree of arrays, integrated with the bodies through ``external.coupled``,
+    :func:`rhs`); ``elements0``: the force elements' internal states at t0 (default:
+    at rest at q0, :func:`initial_element_states`). solver defaults to Tsit5;
+    stepsize_controller to a PIDController with rtol, atol (pass
+    diffrax.ConstantStepSize() for fixed steps dt0); adjoint to
+    RecursiveCheckpointAdjoint (reverse-mode AD works). event and progress_meter are
+    passed to diffrax (a terminating diffrax.Event, a progress meter).
     """
-    y0 = (jnp.asarray(q0, dtype=jnp.float64), jnp.asarray(qdot0, dtype=jnp.float64))
-    if states0 is not None:
-        y0 = y0 + (jax.tree.map(lambda x: jnp.asarray(x, dtype=jnp.float64), states0),)
+    q0 = jnp.asarray(q0, dtype=jnp.float64)
+    if elements0 is None:
+        elements0 = initial_element_states(system, params, q0)
+    y0 = State.of(q0, qdot0, track0, elements0)
     solver = diffrax.Tsit5() if solver is None else solver
     args = (system, params, external)
     # Tsit5 is first-same-as-last: its state is the last stage. Given at the start,

@@ -116,7 +116,8 @@ def _small_rotation(theta):
 def steady_motion(vehicle, params, track, speed, model=None) -> SteadyMotion:
     """The steady motion on straight track (module docstring): the vehicle's rest pose at
     the start of the track, every body moving along it at ``speed`` [m/s]."""
-    q0, qdot0 = initial_state(vehicle, params, track, speed, 0.0, None, model)[:2]
+    start = initial_state(vehicle, params, track, speed, 0.0, None, model)
+    q0, qdot0 = start.q, start.qdot
     n = q0.shape[0] // 7
     body, rate = q0.reshape(n, 7), qdot0.reshape(n, 7)
     omega0 = 2.0 * jnp.einsum("bij,bj->bi", jax.vmap(qt.e_matrix)(body[:, 3:]), rate[:, 3:])

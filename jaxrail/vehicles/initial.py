@@ -20,6 +20,7 @@ import numpy as np
 
 from ..contact.pose import wheelset_pose
 from ..multibody import consistent_initial_conditions, join_coordinates
+from ..multibody import initial_state as system_initial_state
 from ..multibody import quaternion as qt
 from ..multibody import velocities_from_twists
 from ..track import track_frame, track_irregularity
@@ -172,7 +173,9 @@ def wheelset_load(vehicle: Vehicle, params: VehicleParams):
 
 def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalignment=0.0,
                   s0=None, model=None):
-    """``(q0, qdot0)`` of the vehicle at rest on the track, rolling at ``speed`` [m/s].
+    """The :class:`~jaxrail.multibody.State` of the vehicle at rest on the track, rolling
+    at ``speed`` [m/s] (on a flexible track with its rails at rest under the wheels; the
+    force elements' internal states at rest).
 
     Arguments:
         s0: arc length [m] of the vehicle's reference point (default: the rearmost
@@ -224,7 +227,7 @@ def initial_state(vehicle: Vehicle, params: VehicleParams, track, speed, misalig
     axle = jax.vmap(qt.rotation_matrix)(p)[:, :, 1]
     qdot = velocities_from_twists(q, velocity, spin[:, None] * axle)
     q, qdot = consistent_initial_conditions(vehicle.system, params.system, q, qdot)
-    return (q, qdot) if rails is None else (q, qdot, rails)
+    return system_initial_state(vehicle.system, params.system, q, qdot, rails)
 
 
 REST_PASSES = 2

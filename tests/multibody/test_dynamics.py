@@ -52,7 +52,7 @@ BENCH, BENCH_PARAMS = mb.build_system(
 def _simulate_bench(params, q0, qdot0, ts, tol):
     sol = mb.simulate_system(BENCH, params, q0, qdot0, ts[-1], dt0=1e-3,
                              saveat=diffrax.SaveAt(ts=ts), rtol=tol, atol=tol)
-    qs, qds = sol.ys
+    qs, qds = sol.ys.q, sol.ys.qdot
 
     def diagnostics(q, v):
         phi, phidot = mb.constraint_violation(BENCH, params, q, v)

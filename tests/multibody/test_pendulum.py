@@ -41,7 +41,7 @@ def final_angle(pivot_distance, ts):
     sol = mb.simulate_system(PENDULUM, params, jnp.concatenate([r0, p0]), jnp.zeros(7),
                              ts[-1], dt0=1e-3, saveat=diffrax.SaveAt(ts=ts),
                              rtol=1e-11, atol=1e-11)
-    q = sol.ys[0]
+    q = sol.ys.q
     theta = 2.0 * jnp.arctan2(q[:, 5], q[:, 3])
     return theta[-1], theta
 
