@@ -15,3 +15,17 @@ def checked_vector(x, shape, what):
     if a.shape != shape or not np.all(np.isfinite(a)):
         raise ValueError(f"{what} must be finite with shape {shape}, got {x!r}")
     return a
+
+
+def element_label(what, spec, n):
+    """How a message names element ``n`` of a kind: by its name, or by its place."""
+    return f"{what} {spec.name!r}" if spec.name else f"{what} #{n}"
+
+
+def checked_scalar(x, what, positive=False):
+    """``x`` as a float, or a ValueError naming ``what``: finite and >= 0 (> 0 if
+    ``positive``)."""
+    value = float(x)
+    if not (np.isfinite(value) and (value > 0.0 if positive else value >= 0.0)):
+        raise ValueError(f"{what} must be {'>' if positive else '>='} 0, got {x!r}")
+    return value
