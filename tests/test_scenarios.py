@@ -238,3 +238,36 @@ def test_the_suspended_wheelset_refuses_a_curved_track(tmp_path):
     path.write_text(text)
     with pytest.raises(ValueError, match=r"straight track only.*segments \[2\]"):
         load_scenario(str(path)).build()
+
+
+def test_a_scenario_names_a_vehicle_file_relative_to_itself(tmp_path):
+    """``[vehicle] file`` is read relative to the scenario, and the built-in name
+    ``trailer`` is that same vehicle file: the two build the same vehicle, number for
+    number; the file's own profiles serve where the scenario names none."""
+    import jax
+
+    from jaxrail.vehicles.vehicle_file import data_folder
+
+    folder = tmp_path / "study"
+    folder.mkdir()
+    (folder / "my_vehicle.toml").write_text((data_folder() / "trailer.toml").read_text())
+    text = MINIMAL.replace('model = "trailer"\nwheel = "s1002"\nrail = "uic60"',
+                           'file = "my_vehicle.toml"')
+    (folder / "run.toml").write_text(text)
+    from_file, params_file, _ = load_scenario(folder / "run.toml").build()
+    builtin, params_builtin, _ = parse_scenario(MINIMAL).build()
+    assert from_file.system == builtin.system and from_file.wheelsets == builtin.wheelsets
+    for a, b in zip(jax.tree.leaves(params_file), jax.tree.leaves(params_builtin)):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+@pytest.mark.parametrize("vehicle, message", [
+    ('model = "trailer"\nfile = "v.toml"', "give a model or a file, not both"),
+    ('file = "nowhere.toml"', "[vehicle] file: no such file"),
+    ('model = "tram"', "model must be one of"),
+    ('wheel = "s1002"', "needs a model"),
+])
+def test_bad_vehicle_entries_are_named(vehicle, message):
+    text = MINIMAL.replace('model = "trailer"\nwheel = "s1002"\nrail = "uic60"', vehicle)
+    with pytest.raises(ValueError, match=re.escape(message)):
+        parse_scenario(text, "bad.toml")

@@ -27,7 +27,8 @@ from .irregularities import IrregularitySpec, parse_irregularities
 from ..simulation import INTEGRATORS, SolverOptions, run_span, simulate
 from ..track import Arc, Straight, Track, Transition
 from ..track.flexible import FlexibleTrack
-from ..vehicles import CONTACT_MODELS, bogie, contact_model, single_wheelset, trailer
+from ..vehicles import CONTACT_MODELS, bogie, contact_model, single_wheelset
+from ..vehicles.from_file import vehicle_from_file, vehicle_names
 from ..vehicles.suspended_wheelset import suspended_wheelset
 from ..vehicles.trailer import trailer_values
 
@@ -39,7 +40,9 @@ BUILTIN = ("paper-curve", "paper-curve-simplified", "paper-curve-irregular", "st
 _SEGMENTS = {"straight": (Straight, {"length"}),
              "transition": (Transition, {"length"}),
              "arc": (Arc, {"length", "radius", "direction", "cant"})}
-_MODELS = ("trailer", "bogie", "single-wheelset", "suspended-wheelset")
+_BUILDERS = ("bogie", "single-wheelset", "suspended-wheelset")
+"""The vehicles still built in Python; every other ``[vehicle] model`` is a built-in
+vehicle file (:func:`jaxrail.vehicles.vehicle_names`, the trailer among them)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -49,8 +52,8 @@ class Scenario:
     name: str
     description: str
     model: str
-    wheel: str
-    rail: str
+    wheel: str | None
+    rail: str | None
     inclination: str
     vehicle_data: str | None
     friction: float
@@ -68,6 +71,7 @@ class Scenario:
     jacobian_every: int = 8
     irregularities: IrregularitySpec | None = None
     flexible: dict | None = None
+    vehicle_file: str | None = None
 
     def solver_options(self, duration=None, progress=False) -> SolverOptions:
         """SolverOptions with ``output_rate`` samples per second over the duration."""
@@ -125,9 +129,12 @@ class Scenario:
                 f"{speed:g} m/s); give a longer file or a shorter run")
 
     def _profile(self, key):
-        """The ``[vehicle] key`` profile (key "wheel" or "rail"); ValueError names the
-        file, the key and what was given."""
+        """The ``[vehicle] key`` profile (key "wheel" or "rail"), None where the scenario
+        leaves it to the vehicle file; ValueError names the file, the key and what was
+        given."""
         name = getattr(self, key)
+        if name is None:
+            return None
         try:
             kind, profile = named_profile(name, self.inclination, kind=None)
         except ValueError as error:
@@ -141,9 +148,12 @@ class Scenario:
         for a left curve of that radius (its frame turning about the curve's centre) and
         leave the scenario's track to the caller (the stability analysis in a curve)."""
         wheel, rail = self._profile("wheel"), self._profile("rail")
-        if self.model in ("trailer", "bogie"):
-            values = trailer_values(self.vehicle_data)
-            vehicle, params = (trailer if self.model == "trailer" else bogie)(wheel, rail, values)
+        if self.vehicle_file is not None or self.model not in _BUILDERS:
+            values = None if self.vehicle_data is None else trailer_values(self.vehicle_data)
+            vehicle, params = vehicle_from_file(self.vehicle_file or self.model, wheel=wheel,
+                                                rail=rail, parameters=values)
+        elif self.model == "bogie":
+            vehicle, params = bogie(wheel, rail, trailer_values(self.vehicle_data))
         elif self.model == "suspended-wheelset":
             curved = [k + 1 for k, seg in enumerate(self.segments) if seg["kind"] != "straight"]
             if curved and curve_radius is None:
@@ -159,7 +169,7 @@ class Scenario:
         return vehicle, params, self.track()
 
 
-_TABLES = {"vehicle": {"model", "wheel", "rail", "inclination", "data"},
+_TABLES = {"vehicle": {"model", "file", "wheel", "rail", "inclination", "data"},
            "contact": {"friction", "mode"},
            "track": {"segments", "flexible"},
            "run": {"speed", "misalignment", "duration"},
@@ -218,16 +228,39 @@ def _flexible(raw, where):
     return values
 
 
-def _vehicle_data(vehicle, where):
-    """The vehicle data file of [vehicle] data (relative to the scenario file), checked."""
-    if "data" not in vehicle:
+def _vehicle_path(vehicle, key, where):
+    """The file of ``[vehicle] key`` (relative to the scenario file), checked; None if
+    the key is not given."""
+    if key not in vehicle:
         return None
-    path = Path(checks.text(vehicle, "data", where, "[vehicle]"))
+    path = Path(checks.text(vehicle, key, where, "[vehicle]"))
     if not path.is_absolute() and Path(where).exists():
         path = Path(where).parent / path
     if not path.is_file():
-        raise ValueError(f"{where}: [vehicle] data: no such file {str(path)!r}")
+        raise ValueError(f"{where}: [vehicle] {key}: no such file {str(path)!r}")
     return str(path)
+
+
+def _profile_name(vehicle, key, where):
+    """``[vehicle] wheel`` or ``rail``: required for the vehicles built in Python; a
+    vehicle file names its own, which the scenario's replaces where given."""
+    if key not in vehicle and vehicle.get("model") not in _BUILDERS:
+        return None
+    return checks.text(vehicle, key, where, "[vehicle]")
+
+
+def _vehicle_model(vehicle, where):
+    """``[vehicle] model``: a vehicle built in Python or a built-in vehicle file's name
+    (default ``"trailer"`` where a ``file`` is given, which it names instead)."""
+    models = _BUILDERS + tuple(vehicle_names())
+    if "file" in vehicle:
+        if "model" in vehicle:
+            raise ValueError(f"{where}: [vehicle] give a model or a file, not both")
+        return "file"
+    if "model" not in vehicle:
+        raise ValueError(f"{where}: [vehicle] needs a model (one of {', '.join(models)}) or "
+                         f"a file")
+    return checks.text(vehicle, "model", where, "[vehicle]", choices=models)
 
 
 def _name(raw, where):
@@ -256,11 +289,12 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
     scenario = Scenario(
         name=_name(raw, where),
         description=checks.text(raw, "description", where, "the scenario", ""),
-        model=checks.text(vehicle, "model", where, "[vehicle]", choices=_MODELS),
-        wheel=checks.text(vehicle, "wheel", where, "[vehicle]"),
-        rail=checks.text(vehicle, "rail", where, "[vehicle]"),
+        model=_vehicle_model(vehicle, where),
+        wheel=_profile_name(vehicle, "wheel", where),
+        rail=_profile_name(vehicle, "rail", where),
         inclination=checks.text(vehicle, "inclination", where, "[vehicle]", "1:40"),
-        vehicle_data=_vehicle_data(vehicle, where),
+        vehicle_data=_vehicle_path(vehicle, "data", where),
+        vehicle_file=_vehicle_path(vehicle, "file", where),
         friction=number(contact.get("friction", 0.4), "friction", where, "[contact] friction"),
         segments=_segments(tables["track"].get("segments"), where),
         speed=number(run.get("speed"), "speed", where, "[run] speed"),
