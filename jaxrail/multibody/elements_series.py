@@ -9,10 +9,10 @@ points (length s [m], free length L0 [m]), with the damper's own extension z [m]
 
     F = k_s (s - L0 - z)   (tension positive),      zdot = v(F),
 
-v(F) the damper's velocity at force F: the inverse of its force-velocity
-characteristic, given as a table (blow-off: a steep slope up to the relief force, a
-shallow one beyond) and interpolated monotonically (:mod:`.characteristic`), or
-linear, v = F / c. Stored energy k_s (s - L0 - z)^2 / 2; dissipated power F v(F).
+v(F) the damper's velocity at force F: its force-velocity characteristic, given as a
+table (blow-off: a steep slope up to the relief force, a shallow one beyond), read as
+velocity against force and interpolated monotonically (:mod:`.pchip`: exact at the
+table's points), or linear, v = F / c. Stored energy k_s (s - L0 - z)^2 / 2; dissipated power F v(F).
 Under a sinusoid s = L0 + x0 sin(w t) its force tends to that of the complex stiffness
 K(w) = k_s i w c / (k_s + i w c) (linear damper).
 
@@ -46,7 +46,7 @@ from jaxtyping import Array, Float
 from . import quaternion as qt
 from ._values import float64_array
 from .element_geometry import line_length, separation
-from .characteristic import Characteristic, check_table, interpolate, monotone_slopes
+from .pchip import check_table, extend_table, monotone_slopes, value_and_integral
 
 
 @dataclasses.dataclass(frozen=True)
@@ -96,13 +96,16 @@ class AirSpring:
 
 class MaxwellDamperParams(eqx.Module):
     """(k, 3) points [m]; (k,) series stiffness [N/m] and free length [m]; the damper's
-    velocity against force, (k, m) forces [N], velocities [m/s] and slopes [m/(N s)]."""
+    velocity against force: (k, m) forces [N], velocities [m/s] and the interpolant's
+    slopes [m/(N s)] (:mod:`.pchip`)."""
 
     point_i: Float[Array, "k 3"]
     point_j: Float[Array, "k 3"]
     series_stiffness: Float[Array, " k"]
     free_length: Float[Array, " k"]
-    velocity_of_force: Characteristic
+    forces: Float[Array, "k m"]
+    velocities: Float[Array, "k m"]
+    slopes: Float[Array, "k m"]
 
 
 class AirSpringParams(eqx.Module):
@@ -141,7 +144,8 @@ def _maxwell_law(s, sdot, e, z):
 
 
 def _maxwell_rate(s, sdot, e, z):
-    return interpolate(e.velocity_of_force, _maxwell_force(s, e, z)[0])[None]
+    force = _maxwell_force(s, e, z)[0]
+    return value_and_integral(e.forces, e.velocities, e.slopes, force)[0][None]
 
 
 def _maxwell_initial(s, e):
@@ -163,21 +167,15 @@ def _damper_table(spec, what):
         return np.array([-1.0, 1.0]) * c, np.array([-1.0, 1.0])
     if spec.velocities is None or spec.forces is None:
         raise ValueError(f"{what}: a characteristic needs both velocities and forces")
-    v, f = check_table(spec.velocities, spec.forces, f"{what} characteristic")
+    f, v = check_table(spec.forces, spec.velocities, f"{what} characteristic",
+                       ("forces", "velocities"))
     return f, v
 
 
 def _maxwell_params(specs, what):
     tables = [_damper_table(s, f"{what} {s.name!r}") for s in specs]
     size = max(len(f) for f, _ in tables)
-    columns = []
-    for (f, v), s in zip(tables, specs):
-        if len(f) == 2 and size > 2:  # a linear damper, on as many collinear points
-            f, v = np.linspace(f[0], f[1], size), np.linspace(v[0], v[1], size)
-        elif len(f) != size:
-            raise ValueError(f"{what} {s.name!r}: all characteristics of one vehicle's "
-                             f"Maxwell dampers need as many points ({size}), got {len(f)}")
-        columns.append((f, v, monotone_slopes(f, v)))
+    columns = [extend_table(f, v, monotone_slopes(f, v), size) for f, v in tables]
     f, v, m = (float64_array(np.stack(c)) for c in zip(*columns))
     return MaxwellDamperParams(
         point_i=float64_array([s.point_i for s in specs]),
@@ -185,7 +183,7 @@ def _maxwell_params(specs, what):
         series_stiffness=float64_array(_positive([s.series_stiffness for s in specs], what,
                                                  "series_stiffness")),
         free_length=float64_array([s.free_length for s in specs]),
-        velocity_of_force=Characteristic(f, v, m),
+        forces=f, velocities=v, slopes=m,
     )
 
 

@@ -22,6 +22,12 @@ Kinds and deformation coordinates (points and axes in the frames of their bodies
                        one axis); F = K s + C sdot + F0 (six values each, diagonal).
     bump_stop (1):     s = a_i . (r_Pj - r_Pi), a_i = A_i axis_i; acts once s exceeds
                        the clearance: F = max(k (s - c) + d sdot, 0) for s > c, else 0.
+
+Further kinds, each in a module of its own: ``table_spring`` (a nonlinear spring or
+bump stop from a table, :mod:`.table_spring`), ``anti_roll_bar`` (:mod:`.anti_roll_bar`),
+``friction_damper`` (:mod:`.friction_damper`), ``traction_rod`` (:mod:`.traction_rod`),
+and two with internal states (``State.elements``), ``maxwell_damper`` and
+``air_spring`` (:mod:`.elements_series`).
 """
 
 import dataclasses

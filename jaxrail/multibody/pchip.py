@@ -34,9 +34,11 @@ import jax.numpy as jnp
 import numpy as np
 
 
-def check_table(x, y, what: str) -> tuple[np.ndarray, np.ndarray]:
-    """(x, y) as float arrays, or a ValueError naming ``what``: two columns of equal
-    length >= 2, finite, x strictly increasing and y non-decreasing (monotone)."""
+def check_table(x, y, what: str, names=("displacements", "forces")) -> tuple[np.ndarray,
+                                                                           np.ndarray]:
+    """(x, y) as float arrays, or a ValueError naming ``what`` and the columns'
+    ``names``: two columns of equal length >= 2, finite, x strictly increasing and y
+    non-decreasing (monotone)."""
     x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
     if x.ndim != 1 or x.shape != y.shape or x.size < 2:
         raise ValueError(f"{what}: a table needs two columns of equal length >= 2, got "
@@ -45,11 +47,11 @@ def check_table(x, y, what: str) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"{what}: the table's values must be finite, got {x.tolist()} "
                          f"and {y.tolist()}")
     if np.any(np.diff(x) <= 0.0):
-        raise ValueError(f"{what}: the displacements must be strictly increasing, got "
+        raise ValueError(f"{what}: the {names[0]} must be strictly increasing, got "
                          f"{x.tolist()}")
     if np.any(np.diff(y) < 0.0):
-        raise ValueError(f"{what}: the forces must be non-decreasing in displacement (a "
-                         f"monotone characteristic), got {y.tolist()}")
+        raise ValueError(f"{what}: the {names[1]} must be non-decreasing in the "
+                         f"{names[0]} (a monotone characteristic), got {y.tolist()}")
     return x, y
 
 

@@ -148,7 +148,9 @@ def build_system(bodies, joints=(), forces=(), gravity=(0.0, 0.0, 0.0),
         bodies: sequence of RigidBody (n >= 1); body index = position in it.
         joints: Spherical / Revolute / Prismatic / Fixed; bodies by name, index, or
             "ground" / -1 for the fixed global frame.
-        forces: SpringDamper / Bushing / BumpStop.
+        forces: descriptions of any kind of forces.FORCE_KINDS (SpringDamper, Bushing,
+            BumpStop, TableSpring, AntiRollBar, FrictionDamper, TractionRod,
+            MaxwellDamper, AirSpring).
         gravity: (3,) [m/s^2], global; e.g. (0, 0, -9.81) with z up.
         baumgarte: (alpha, beta) [1/s], feedback gains of eq. (19).
     """
