@@ -278,7 +278,7 @@ def _montecarlo_command(args):
                              write_table)
     from .montecarlo.sampling import check_names
     from .scenarios import load_scenario
-    from .vehicles.parameters import PARAMETERS
+    from .vehicles.parameters import vehicle_parameters
 
     if args.distributed:
         import jax
@@ -291,8 +291,9 @@ def _montecarlo_command(args):
         if Path(path).suffix.lower() not in (".csv", ".parquet"):
             raise ValueError(f"--out {path}: the suffix must be .csv or .parquet")
     variations = [parse_variation(v) for v in args.vary or ()]
-    check_names([v.name for v in variations], PARAMETERS)
     scenario = _with_integrator(load_scenario(args.scenario), args)
+    built = scenario.build()
+    check_names([v.name for v in variations], vehicle_parameters(*built[:2]))
     duration = _duration(scenario, args)
     import jax
 
@@ -308,7 +309,7 @@ def _montecarlo_command(args):
     result = run_montecarlo(scenario, variations, args.samples, seed=args.seed,
                             design=args.design, duration=duration, chunk=args.chunk,
                             progress=not args.quiet, contact=args.contact,
-                            checkpoint=checkpoint, overwrite=args.overwrite)
+                            checkpoint=checkpoint, overwrite=args.overwrite, built=built)
     table = result.table
     print(f"{result.statuses} in {result.run_time_s:.1f} s (+ {result.compile_time_s:.1f} s "
           f"compiling), {result.throughput(duration):.3g} simulated s per wall s, "

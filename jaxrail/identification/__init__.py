@@ -108,7 +108,7 @@ def simulation_residuals(vehicle, params, track, names, measurements: Measuremen
     1e3 noise levels off."""
     check_channels(measurements.channels, vehicle)
     for name in names:
-        parameter(name).get(vehicle, params)  # raises for a parameter the vehicle lacks
+        parameter(name, vehicle, params).get(vehicle, params)  # raises if the vehicle lacks it
     if measurements.time[-1] > duration + 1e-12:
         raise ValueError(f"measurements reach {measurements.time[-1]} s, the simulation "
                          f"only {duration} s")
@@ -192,12 +192,12 @@ def _residual_functions(vehicle, params, track, names, measurements, common):
     return _residual_cache.get_or_make(key, functions)[0][0]
 
 
-def _checked_bounds(bounds) -> dict:
+def _checked_bounds(bounds, vehicle, params) -> dict:
     """User bounds {name: (lo, hi)}: within the parameter's range, 0 < lo < hi (the fit
     moves in log space)."""
     out = {}
     for name, pair in dict(bounds or {}).items():
-        lo, hi = (parameter(name).check(x, "bounds") for x in pair)
+        lo, hi = (parameter(name, vehicle, params).check(x, "bounds") for x in pair)
         if not 0.0 < lo < hi:
             raise ValueError(f"bounds: {name} needs 0 < lo < hi, got ({lo:g}, {hi:g})")
         out[name] = (lo, hi)
@@ -226,8 +226,10 @@ def identify(scenario, measurements: Measurements, names, initial=None, bounds=N
     unknown = set(initial) - set(names)
     if unknown:
         raise ValueError(f"initial values for parameters not fitted: {sorted(unknown)}")
-    x0 = np.array([parameter(n).check(initial[n], "initial value") for n in names])
-    limits = {n: (v / 10.0, v * 10.0) for n, v in zip(names, x0)} | _checked_bounds(bounds)
+    x0 = np.array([parameter(n, vehicle, params).check(initial[n], "initial value")
+                   for n in names])
+    limits = ({n: (v / 10.0, v * 10.0) for n, v in zip(names, x0)}
+              | _checked_bounds(bounds, vehicle, params))
     lower = np.array([limits[n][0] for n in names])
     upper = np.array([limits[n][1] for n in names])
     for name, value, lo, hi in zip(names, x0, lower, upper):

@@ -17,7 +17,8 @@ import numpy as np
 
 from .._ranges import within
 from ..scenarios import checks
-from ..vehicles.parameters import PARAMETERS, check_contact_follows, get_values
+from ..vehicles.parameters import (PARAMETERS, check_contact_follows, get_values,
+                                   vehicle_parameters)
 from .batch import run_chunks
 from .checkpoint import Checkpoint, shared_rows, study_key
 from .sampling import DESIGNS, Variation, check_names, draw, parse_variation
@@ -63,18 +64,18 @@ MAX_SEED = 2 ** 31 - 1
 """Largest irregularity seed."""
 
 
-def check_samples(samples: dict, where: str, key: str) -> None:
+def check_samples(samples: dict, where: str, key: str, known=PARAMETERS) -> None:
     """Every value of ``samples`` {input: array} within the range of its input: the
     scenario's (:data:`jaxrail.scenarios.checks.RANGES`) for speed and misalignment,
-    the parameter's (:mod:`jaxrail.vehicles.parameters`) for the others. The error
-    names ``where`` (with ``{name}`` for the input) and ``key``."""
+    the parameter's (``known``: :mod:`jaxrail.vehicles.parameters`) for the others. The
+    error names ``where`` (with ``{name}`` for the input) and ``key``."""
     for name, values in samples.items():
         if name in ("speed", "misalignment", "irregularity_scale"):
             low, high, unit = checks.RANGES[name]
         elif name == "irregularity_seed":
             low, high, unit = 0.0, float(MAX_SEED), "-"
-        elif name in PARAMETERS:
-            (low, high), unit = PARAMETERS[name].range, PARAMETERS[name].unit
+        elif name in known:
+            (low, high), unit = known[name].range, known[name].unit
         else:
             continue
         values = np.atleast_1d(np.asarray(values, dtype=float))
@@ -121,18 +122,19 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
     same study resumes from it (another study is refused unless ``overwrite``)."""
     import jax
 
-    check_names(samples, PARAMETERS)
+    vehicle, params, track = scenario.build() if built is None else built
+    known = vehicle_parameters(vehicle, params)
+    check_names(samples, known)
     # a misalignment beyond the lateral limit is a start that ends "derailed" at once
     check_samples({k: v for k, v in samples.items() if k != "misalignment"},
-                  "samples[{name!r}]", "a value")
+                  "samples[{name!r}]", "a value", known)
     lengths = {k: len(np.atleast_1d(v)) for k, v in samples.items()}
     if len(set(lengths.values())) > 1:
         raise ValueError(f"samples: every input needs the same number of values, got {lengths}")
     n = next(iter(lengths.values()), 1)
-    vehicle, params, track = scenario.build() if built is None else built
     duration = scenario.duration if duration is None else float(duration)
     options = scenario.solver_options(duration=duration)
-    names = tuple(k for k in samples if k in PARAMETERS)
+    names = tuple(k for k in samples if k in known)
     check_contact_follows(names, scenario.contact if contact is None else contact)
     speed = np.broadcast_to(np.asarray(samples.get("speed", scenario.speed), np.float64), (n,))
     shift = np.broadcast_to(np.asarray(samples.get("misalignment", scenario.misalignment),
@@ -195,7 +197,10 @@ def run_montecarlo(scenario, variations, n: int, *, seed: int = 0, design: str =
     if n > MAX_SAMPLES:
         raise ValueError(f"{n} samples: at most {MAX_SAMPLES} in one study")
     samples = draw(variations, n, seed=seed, design=design)
-    check_samples(samples, "--vary {name}", "a drawn value")
+    if kwargs.get("built") is None:
+        kwargs["built"] = scenario.build()
+    check_samples(samples, "--vary {name}", "a drawn value",
+                  vehicle_parameters(*kwargs["built"][:2]))
     result = run_samples(scenario, samples, **kwargs)
     result.seed = seed
     return result

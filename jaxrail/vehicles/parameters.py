@@ -194,20 +194,33 @@ PARAMETERS = {p.name: p for p in [
 ]}
 
 
-def parameter(name: str) -> Parameter:
-    """The :class:`Parameter` called ``name``; ValueError lists the known names."""
-    if name not in PARAMETERS:
-        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(PARAMETERS)}")
-    return PARAMETERS[name]
+def vehicle_parameters(vehicle, params) -> dict[str, Parameter]:
+    """Every named parameter of this vehicle: :data:`PARAMETERS` and those made from its
+    force elements (:mod:`jaxrail.vehicles.element_parameters`, ``<family>.<field>``)."""
+    from .element_parameters import element_parameters
+    return PARAMETERS | element_parameters(vehicle, params)
+
+
+def parameter(name: str, vehicle=None, params=None) -> Parameter:
+    """The :class:`Parameter` called ``name``: one of :data:`PARAMETERS`, or with the
+    vehicle and its params one of its elements' (``<family>.<field>``); ValueError lists
+    the known names."""
+    if name in PARAMETERS:
+        return PARAMETERS[name]
+    known = PARAMETERS if vehicle is None else vehicle_parameters(vehicle, params)
+    if name not in known:
+        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(known)}")
+    return known[name]
 
 
 def get_values(vehicle, params, names) -> jnp.ndarray:
     """Values (k,) of the named parameters."""
-    return jnp.stack([jnp.asarray(parameter(n).get(vehicle, params)) for n in names])
+    return jnp.stack([jnp.asarray(parameter(n, vehicle, params).get(vehicle, params))
+                      for n in names])
 
 
 def set_values(vehicle, params, names, values) -> VehicleParams:
     """``params`` with the named parameters set to ``values`` (k,) (traced)."""
     for k, name in enumerate(names):
-        params = parameter(name).set(vehicle, params, values[k])
+        params = parameter(name, vehicle, params).set(vehicle, params, values[k])
     return params
