@@ -30,7 +30,8 @@ def test_builtin_scenarios_build(name):
     scenario = load_scenario(name)
     vehicle, params, track = scenario.build()
     assert scenario.name == name
-    assert vehicle.n_wheelsets == {"trailer": 4, "bogie": 2, "suspended-wheelset": 1}[
+    assert vehicle.n_wheelsets == {"trailer": 4, "bogie": 2, "suspended-wheelset": 1,
+                                  "coach": 4, "wagon": 2}[
         scenario.model]
     assert float(params.contact.friction) == scenario.friction
     assert scenario.solver_options().n_outputs == int(scenario.duration * scenario.output_rate) + 1

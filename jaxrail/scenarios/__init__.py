@@ -36,7 +36,8 @@ __all__ = ["BUILTIN", "Scenario", "load_scenario", "parse_scenario", "prepare_sc
            "run_scenario"]
 
 BUILTIN = ("paper-curve", "paper-curve-simplified", "paper-curve-irregular", "straight",
-           "straight-irregular", "bogie-curve-entry", "suspended-wheelset")
+           "straight-irregular", "bogie-curve-entry", "suspended-wheelset",
+           "coach-curve-irregular", "wagon-straight-irregular")
 _SEGMENTS = {"straight": (Straight, {"length"}),
              "transition": (Transition, {"length"}),
              "arc": (Arc, {"length", "radius", "direction", "cant"})}

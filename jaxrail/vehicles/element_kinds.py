@@ -158,10 +158,34 @@ def _bushing_static(values: dict, load: float, upper_is_j: bool) -> dict:
     return {**values, "preload": force + [0.0, 0.0, 0.0]}
 
 
-STATIC_PRELOADS: dict[str, typing.Callable] = {"bushing": _bushing_static}
+def _air_spring_static(values: dict, load: float, upper_is_j: bool) -> dict:
+    """An air spring's scalar vertical preload F0 [N] carrying ``load`` at zero
+    deflection: its vertical force F0 + k1 u_z + ... acts like a bushing's (same sign as
+    K u, in body i's axes), so F0 = -load pushes an upper body j up, +load an upper
+    body i (:class:`~jaxrail.multibody.elements_series.AirSpring`)."""
+    return {**values, "preload": -load if upper_is_j else load}
+
+
+STATIC_PRELOADS: dict[str, typing.Callable] = {"bushing": _bushing_static,
+                                               "air_spring": _air_spring_static}
 """kind -> ``f(values, load [N], upper_is_j) -> values``: how ``preload = "static"``
 sets an element's fields to carry ``load`` at zero deflection. Kinds not listed but
 with a six-entry ``preload`` field use the bushing's rule."""
+
+NOMINAL_LENGTHS = ("free_length",)
+"""Fields that take ``"nominal"``: the distance [m] between the element's two points
+at the nominal layout (``at_i``, ``at_j``), so that a spring or rod along the line
+between them (a Maxwell damper, a traction rod, a spring-damper) is unloaded there."""
+
+
+def nominal_length(at_i, at_j) -> float:
+    """|at_j - at_i| [m]: the distance between two points of the vehicle frame; a
+    ``"nominal"`` length must not be zero (the line between the points is undefined)."""
+    length = float(np.linalg.norm(np.subtract(at_j, at_i, dtype=np.float64)))
+    if not length > 0.0:
+        raise ValueError("\"nominal\": the element's points coincide, so the distance "
+                         "between them is zero; give at_i and at_j apart")
+    return length
 
 
 def static_preload(cls, values: dict, load: float, upper_is_j: bool) -> dict:

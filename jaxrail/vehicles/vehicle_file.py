@@ -251,6 +251,12 @@ class _Reader:
             if ek.is_plain(cls, key):
                 values[key] = value
                 continue
+            if key in ek.NOMINAL_LENGTHS and value == "nominal":
+                try:
+                    values[key] = ek.nominal_length(at_i, at_j)
+                except ValueError as error:
+                    raise self.error(table, key, str(error)) from None
+                continue
             unit = ek.expected_unit(cls, key)
             q = self.number(value, table, key, unit, ek.is_direction(key))
             values[key] = ek.mirrored(cls, key, plain(q)) if side == -1 else plain(q)
