@@ -453,6 +453,33 @@ def _assess_command(args):
     return 0 if assessment["passed"] else 1
 
 
+def _vehicle_command(args):
+    from .vehicles.report import format_report, vehicle_list, vehicle_report
+
+    if args.vehicle_command == "list":
+        for name, description in vehicle_list():
+            print(f"{name:<24}{description}")
+        return 0
+    from ._compiler import use_persistent_cache
+    from .vehicles.from_file import vehicle_file_path
+
+    path = vehicle_file_path(args.name)  # a bad name fails here, before compiling
+    use_persistent_cache()
+    print(f"jaxrail vehicle show {args.name}: the rest pose and the modes (compiling) ...",
+          file=sys.stderr)
+    report = vehicle_report(path)
+    print(format_report(report))
+    if args.json:
+        _emit_json(report, args.json)
+    if args.plot:
+        from .plots.vehicle import plot_vehicle
+        from .vehicles import vehicle_from_file
+
+        plot_vehicle(*vehicle_from_file(path), args.plot)
+        print(f"wrote {args.plot}", file=sys.stderr)
+    return 0
+
+
 # Options that several commands share, each written once so that its name, default and
 # help read the same in every command (argparse lists options in the order they are added).
 
@@ -690,6 +717,21 @@ def build_parser():
                         help="curve radius of the section [m] (default: straight track, "
                              "no quasi-static checks)")
     assess.set_defaults(run=_assess_command)
+
+    vehicle = commands.add_parser(
+        "vehicle", help="the built-in vehicles; a vehicle's bodies, wheel loads at rest and "
+                        "modes standing on the track")
+    vehicle_commands = vehicle.add_subparsers(dest="vehicle_command", required=True)
+    vehicle_commands.add_parser("list", help="the built-in vehicles and their descriptions")
+    show = vehicle_commands.add_parser(
+        "show", help="bodies and masses, wheel loads at rest and the modes with the "
+                     "wheelsets clamped (creep forces vanish at rest)")
+    show.add_argument("name", help="a built-in vehicle (jaxrail vehicle list) or a vehicle "
+                                   ".toml file")
+    show.add_argument("--json", help="write the report as JSON here (the tables go to "
+                                     "stdout either way)")
+    show.add_argument("--plot", help="write a side and plan view of the vehicle (PNG) here")
+    vehicle.set_defaults(run=_vehicle_command)
     return parser
 
 

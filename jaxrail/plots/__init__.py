@@ -11,7 +11,9 @@ from .montecarlo import plot_maps as plot_maps
 from .profiles import plot_wheel_on_rail as plot_wheel_on_rail
 from .simulation import plot_wheelsets as plot_wheelsets
 from .track import plot_irregularity_psd as plot_irregularity_psd
+from .vehicle import plot_vehicle as plot_vehicle
 
 __all__ = ["plot_contact_positions", "plot_derailment_ratio", "plot_distributions",
            "plot_forces", "plot_geometry", "plot_identification", "plot_irregularity_psd",
-           "plot_lateral_displacements", "plot_maps", "plot_wheel_on_rail", "plot_wheelsets"]
+           "plot_lateral_displacements", "plot_maps", "plot_vehicle", "plot_wheel_on_rail",
+           "plot_wheelsets"]

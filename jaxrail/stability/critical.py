@@ -26,7 +26,7 @@ from ..vehicles.loads import resolve_contact_model
 from ..vehicles.parameters import check_contact_follows, get_values, parameter, set_values
 from .curving import SteadyCurving
 from .linear import (check_track, comoving_rhs, is_one_arc, linear_system, modes,
-                     steady_motion)
+                     state_size, steady_motion)
 
 SPEED_TOLERANCE = 1e-7  # the root solve stops when a step moves the speed less (relative)
 MAX_ITERATIONS = 60
@@ -156,7 +156,7 @@ class LinearStability:
         ValueError lists the known ones."""
         names = tuple(names)
         for name in names:
-            parameter(name)
+            parameter(name, self.vehicle, self.params)
         check_contact_follows(names, self.model.name)
         if self.curving is not None:
             raise ValueError("the critical speed's gradient is implemented on straight "
@@ -170,7 +170,7 @@ class LinearStability:
         programs = self._derivatives.get(names)
         if programs is None:
             vehicle, track, model = self.vehicle, self.track, self.model
-            z0 = jnp.zeros(12 * vehicle.system.n_bodies)
+            z0 = jnp.zeros(state_size(vehicle))
 
             def product(x, flat_steady, params, direction):
                 params = set_values(vehicle, params, names, x[1:])
@@ -194,7 +194,7 @@ class LinearStability:
         steady_rate = np.asarray(programs[1](x, params))
 
         def total(direction):
-            """d(A direction)/dx (12 n, 1 + k), the steady motion's change included."""
+            """d(A direction)/dx (N, 1 + k), the steady motion's change included."""
             by_x, by_steady = programs[0](x, flat_steady, params, jnp.asarray(direction))
             return np.asarray(by_x) + np.asarray(by_steady) @ steady_rate
 

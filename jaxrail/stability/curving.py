@@ -37,7 +37,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..multibody import constraints, velocities_from_twists
+from ..multibody import constraints, initial_element_states, velocities_from_twists
 from ..multibody import quaternion as qt
 from ..track import to_track_coordinates, track_frame
 from ..vehicles.drive import ConstantForce
@@ -139,8 +139,11 @@ def curving_residual(u, vehicle, params, track, base, frame_rate, centre, body, 
     qdot = velocities_from_twists(q, velocity, omega)
     bodies = q.reshape(n, 7)
     force = ConstantForce(body, u[-1] * _tangent(bodies[body, :3], frame_rate, centre))
+    # the elements' internal states at rest at the pose: in the turning frame nothing
+    # moves, so a Maxwell damper carries no force and an air spring's reservoir settles
+    elements = initial_element_states(vehicle.system, params.system, q)
     qddot = vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model,
-                                  force).reshape(n, 7)
+                                  force, elements).reshape(n, 7)
     alpha = 2.0 * jnp.einsum("bij,bj->bi", jax.vmap(qt.e_matrix)(bodies[:, 3:]),
                              qddot[:, 3:])
     linear = qddot[:, :3] - jnp.cross(frame_rate, jnp.cross(frame_rate, bodies[:, :3] - centre))

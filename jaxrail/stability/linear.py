@@ -29,10 +29,22 @@ gain the frame's terms, ``dv' = a - 2 Omega x dv - Omega x (Omega x (r - c))`` a
 ``theta'``. On straight track ``Omega = 0`` and these are the equations above. The
 constant tangential force that holds the speed in the curve drops out of A.
 
+A vehicle whose force elements have internal states (a Maxwell damper's piston, an air
+spring's orifice: :mod:`jaxrail.multibody.elements_series`) has them after the bodies'
+rows, ``z = (dr, theta, dv, domega, dz)``: ``dz`` the change of each internal state from
+its steady value, in the order of ``State.elements`` raveled (kinds sorted by name, then
+element by element). Their rows are first order, ``dz' = zdot`` of the perturbed state
+(:func:`jaxrail.multibody.element_rates`). In the steady motion every element is at rest
+at the steady pose (:func:`jaxrail.multibody.initial_element_states`): its length does
+not change, on straight track or in the curve's turning frame, so a Maxwell damper
+carries no force (its rate ``v(F)`` vanishes only there) and an air spring's reservoir
+has settled. A vehicle without such elements has ``z`` of 12 n rows, as before.
+
 The joints tie these coordinates: A leaves the tangent space of the constraint manifold
 (the positions' and velocities' linearised constraints) invariant, and the modes of the
 vehicle are A's eigenvalues on that space (an orthonormal basis from the constraints'
-null space). Eigenvalues outside it are Baumgarte's stabilisation, not the vehicle.
+null space, extended by the identity on the internal states, which no joint ties).
+Eigenvalues outside it are Baumgarte's stabilisation, not the vehicle.
 
 A **hunting mode** is an oscillatory mode whose kinetic energy (of the rates of dr and
 theta, the wheelsets' spin left out) lies mostly in the wheelsets' lateral and yaw motion (:data:`HUNTING_SHARE`); its frequency is
@@ -45,9 +57,14 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import numpy as np
+import scipy.linalg
+from jax.flatten_util import ravel_pytree
 
-from ..multibody import constraints, join_coordinates, velocities_from_twists
+from ..multibody import (constraints, element_rates, initial_element_states,
+                         join_coordinates, velocities_from_twists)
+from ..multibody import forces as fc
 from ..multibody import quaternion as qt
+from ..multibody.system import stateful_groups
 from ..vehicles.initial import initial_state
 from ..vehicles.loads import resolve_contact_model, vehicle_accelerations
 
@@ -135,24 +152,51 @@ def perturbed_pose(position, q0):
     return join_coordinates(body[:, :3] + position[:, :3], p)
 
 
+def element_state_count(system) -> int:
+    """Rows of ``z`` after the bodies' 12 n: the internal states of the force elements of
+    ``system`` (a :class:`~jaxrail.multibody.System`; 0 without such elements)."""
+    return sum(len(g.body_i) * fc.FORCE_KINDS[g.kind].states
+               for g in stateful_groups(system))
+
+
+def state_size(vehicle) -> int:
+    """Rows of the co-moving coordinates ``z``: 12 per body and the elements' internal
+    states (:func:`element_state_count`)."""
+    return 12 * vehicle.system.n_bodies + element_state_count(vehicle.system)
+
+
+def perturbed_elements(z, system, system_params, steady: SteadyMotion):
+    """The force elements' internal states ``{kind: (k, r)}`` of the perturbation ``z``:
+    at rest at the steady pose (module docstring) plus ``z``'s rows after the bodies';
+    ``{}`` for a system without such elements."""
+    rest = initial_element_states(system, system_params, steady.q)
+    if not rest:
+        return rest
+    flat, unravel = ravel_pytree(rest)
+    return unravel(flat + z[12 * system.n_bodies:])
+
+
 def full_state(z, steady: SteadyMotion):
-    """``(q, qdot)`` of the co-moving perturbation ``z`` (12 n,) of the steady motion."""
+    """``(q, qdot)`` of the co-moving perturbation ``z`` (12 n, or more with internal
+    states) of the steady motion."""
     n = steady.q.shape[0] // 7
-    position, velocity = z[:6 * n].reshape(n, 6), z[6 * n:].reshape(n, 6)
+    position, velocity = z[:6 * n].reshape(n, 6), z[6 * n:12 * n].reshape(n, 6)
     q = perturbed_pose(position, steady.q)
     v = steady.velocity + jnp.cross(steady.frame_rate, position[:, :3]) + velocity[:, :3]
     return q, velocities_from_twists(q, v, steady.angular_velocity + velocity[:, 3:])
 
 
-def comoving_rhs(z, vehicle, params, track, steady: SteadyMotion, model):
-    """``z'`` (12 n,) of the perturbation ``z`` of the steady motion ``steady`` (module
-    docstring)."""
+def comoving_rates(z, system, system_params, steady: SteadyMotion, accelerate):
+    """``z'`` of the perturbation ``z`` of ``steady`` for any multibody system (module
+    docstring): ``accelerate(q, qdot, elements)`` gives qddot (7 n,) of eq. (19) with
+    the system's loads; the internal states' rows are the elements' rates."""
     n = steady.q.shape[0] // 7
     q, qdot = full_state(z, steady)
-    qddot = vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model).reshape(n, 7)
+    elements = perturbed_elements(z, system, system_params, steady)
+    qddot = accelerate(q, qdot, elements).reshape(n, 7)
     p = q.reshape(n, 7)[:, 3:]
     angular = 2.0 * jnp.einsum("bij,bj->bi", jax.vmap(qt.e_matrix)(p), qddot[:, 3:])
-    position, velocity = z[:6 * n].reshape(n, 6), z[6 * n:].reshape(n, 6)
+    position, velocity = z[:6 * n].reshape(n, 6), z[6 * n:12 * n].reshape(n, 6)
     rate = steady.frame_rate
     spin = steady.angular_velocity - rate  # each body's angular velocity in the frame
     turned = jax.vmap(lambda t, w: qt.matvec(qt.rotation_matrix(_small_rotation(t)), w))(
@@ -162,28 +206,42 @@ def comoving_rhs(z, vehicle, params, track, steady: SteadyMotion, model):
     linear = (qddot[:, :3] - 2.0 * jnp.cross(rate, velocity[:, :3])
               - jnp.cross(rate, jnp.cross(rate, arm)))
     angular = angular - jnp.cross(rate, steady.angular_velocity + velocity[:, 3:])
-    return jnp.concatenate([jnp.concatenate([velocity[:, :3], theta_rate], axis=1).reshape(-1),
-                            jnp.concatenate([linear, angular], axis=1).reshape(-1)])
+    rows = [jnp.concatenate([velocity[:, :3], theta_rate], axis=1).reshape(-1),
+            jnp.concatenate([linear, angular], axis=1).reshape(-1)]
+    if elements:
+        rows.append(ravel_pytree(element_rates(system, system_params, q, qdot, elements))[0])
+    return jnp.concatenate(rows)
 
 
-def _joint_rows(vehicle, params, z, steady):
+def comoving_rhs(z, vehicle, params, track, steady: SteadyMotion, model):
+    """``z'`` (:func:`state_size`,) of the perturbation ``z`` of the steady motion
+    ``steady`` of a vehicle on ``track`` with the contact ``model`` (module docstring)."""
+    def accelerate(q, qdot, elements):
+        return vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model,
+                                     elements=elements)
+
+    return comoving_rates(z, vehicle.system, params.system, steady, accelerate)
+
+
+def joint_rows(system, system_params, z, steady):
     """Joint constraints Phi and Phidot (normalisation rows left out) at ``z``."""
     q, qdot = full_state(z, steady)
-    phi, _, phidot, _ = constraints(vehicle.system, params.system, q, qdot)
-    n = vehicle.system.n_bodies
+    phi, _, phidot, _ = constraints(system, system_params, q, qdot)
+    n = system.n_bodies
     return jnp.concatenate([phi[n:], phidot[n:]])
 
 
 def linear_system(vehicle, params, track, steady, model=None):
-    """``(A, C)``: the state matrix (12 n, 12 n) of the co-moving perturbation of the
-    steady motion ``steady`` (:func:`steady_motion`, or
+    """``(A, C)``: the state matrix (N, N) of the co-moving perturbation of the steady
+    motion ``steady`` (:func:`steady_motion`, or
     :class:`~jaxrail.stability.curving.SteadyCurving`'s) and the linearised joint
-    constraints C (2 m, 12 n) (positions, then velocities).
+    constraints C (2 m, N) (positions, then velocities; zero in the internal states'
+    columns); N = :func:`state_size`, 12 n without internal states.
     Traceable: jit, vmap and differentiate it."""
     model = resolve_contact_model(model)
-    z0 = jnp.zeros(12 * vehicle.system.n_bodies)
+    z0 = jnp.zeros(state_size(vehicle))
     a = jax.jacfwd(comoving_rhs)(z0, vehicle, params, track, steady, model)
-    c = jax.jacfwd(_joint_rows, argnums=2)(vehicle, params, z0, steady)
+    c = jax.jacfwd(joint_rows, argnums=2)(vehicle.system, params.system, z0, steady)
     return a, c
 
 
@@ -198,13 +256,24 @@ def tangent_basis(c) -> np.ndarray:
     return vh[rank:].T
 
 
+def state_basis(c, n_bodies: int) -> np.ndarray:
+    """Orthonormal basis (N, k + e) of the tangent space of ``z`` (N = 12 n + e rows):
+    :func:`tangent_basis` of the bodies' columns of ``c``, and the identity on the e
+    internal states of the force elements (no joint ties them)."""
+    c = np.asarray(c, dtype=np.float64)
+    bodies = 12 * n_bodies
+    return scipy.linalg.block_diag(tangent_basis(c[:, :bodies]),
+                                   np.eye(c.shape[1] - bodies))
+
+
 @dataclasses.dataclass(frozen=True)
 class Modes:
     """The vehicle's modes at one speed (host NumPy).
 
     Fields:
         eigenvalues: (k,) complex [1/s].
-        vectors: (12 n, k) complex right eigenvectors in the co-moving coordinates.
+        vectors: (N, k) complex right eigenvectors in the co-moving coordinates
+            (N = 12 n and the elements' internal states, :func:`state_size`).
         hunting_share: (k,) share of each mode's kinetic energy in the running gear's
             lateral and yaw motion (:func:`running_gear`).
         frequency_hz: (k,) ``|Im lambda| / 2 pi``.
@@ -245,15 +314,21 @@ def running_gear(vehicle) -> tuple[int, ...]:
     return tuple(sorted(unsprung | frames))
 
 
+def kinetic_weights(bodies) -> np.ndarray:
+    """Kinetic-energy weights (n, 6) of each body's (dr, theta) rates: its mass [kg]
+    thrice, then the diagonal of its inertia [kg m^2] (body axes, which are the track's
+    at the steady motion and at rest). ``bodies``: :class:`~jaxrail.multibody.BodyParams`."""
+    mass = np.asarray(bodies.mass)
+    inertia = np.asarray(bodies.inertia)  # (n, 3, 3)
+    return np.concatenate([np.repeat(mass[:, None], 3, axis=1),
+                           np.diagonal(inertia, axis1=1, axis2=2)], axis=1)
+
+
 def _energy_weights(vehicle, params):
     """Kinetic-energy weights (n, 6) of each body's (dr, theta) rates, the wheelsets'
     spin left out (it is cyclic), and the mask (n, 6) of the running gear's lateral and
     yaw motion (:func:`running_gear`)."""
-    bodies = params.system.bodies
-    mass = np.asarray(bodies.mass)
-    inertia = np.asarray(bodies.inertia)  # (n, 3, 3), body axes = track axes when steady
-    weights = np.concatenate([np.repeat(mass[:, None], 3, axis=1),
-                              np.diagonal(inertia, axis1=1, axis2=2)], axis=1)
+    weights = kinetic_weights(params.system.bodies)
     weights[np.asarray(vehicle.wheelsets), 4] = 0.0
     mask = np.zeros_like(weights, dtype=bool)
     for body in running_gear(vehicle):
@@ -264,11 +339,11 @@ def _energy_weights(vehicle, params):
 def modes(vehicle, params, a, c) -> Modes:
     """Eigenvalues and eigenvectors of ``a`` on the null space of ``c``, with each
     mode's hunting share."""
-    basis = tangent_basis(c)
+    n = vehicle.system.n_bodies
+    basis = state_basis(c, n)
     a = np.asarray(a, dtype=np.float64)
     values, small = np.linalg.eig(basis.T @ a @ basis)
     vectors = basis @ small
-    n = vehicle.system.n_bodies
     weights, mask = _energy_weights(vehicle, params)
     # the rates of (dr, theta) are lambda times the positions' part: |lambda|^2 cancels
     energy = weights.reshape(-1)[:, None] * np.abs(vectors[:6 * n]) ** 2

@@ -289,8 +289,10 @@ class VehicleLoads(eqx.Module):
 
 
 def vehicle_accelerations(vehicle: Vehicle, params: VehicleParams, track, t, q, qdot,
-                          model=None, drive=None):
+                          model=None, drive=None, elements=None):
     """``qddot`` (7 n,) of eq. (19) with gravity, the suspension, the wheel-rail loads of
-    ``model`` (default :class:`OnlineContact`) and ``drive`` (:class:`VehicleLoads`)."""
+    ``model`` (default :class:`OnlineContact`) and ``drive`` (:class:`VehicleLoads`).
+    ``elements``: the force elements' internal states ``{kind: (k, r)}``
+    (:class:`~jaxrail.multibody.State`), needed where the vehicle has such elements."""
     loads = VehicleLoads(vehicle, params, track, resolve_contact_model(model), drive)
-    return accelerations(vehicle.system, params.system, t, q, qdot, loads)[0]
+    return accelerations(vehicle.system, params.system, t, q, qdot, loads, elements)[0]
