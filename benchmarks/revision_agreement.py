@@ -4,7 +4,10 @@ Runs each scenario for ``--duration`` seconds with this working tree and with th
 revision ``--against`` (checked out into a temporary ``git worktree``), each in its own
 process, and prints JSON: per scenario and contact mode, the largest difference of the
 bodies' positions [m] and Euler parameters [-] over every output, of their rates, the
-wall times, and both runs' statuses and step counts.
+wall times (whole process; the run without compiling, and its real-time factor; the
+compile time), and both runs' statuses and step counts. The two revisions run one after
+the other, so the machine's load is alike for both (the load is printed), each with
+jaxrail's persistent compilation cache off (compiled cold).
 Usage: ``python benchmarks/revision_agreement.py --against b86628e [--duration 3]
 [--scenarios paper-curve paper-curve-irregular] [--contacts table online]``.
 """
@@ -31,13 +34,16 @@ start = time.perf_counter()
 result = run_scenario(load_scenario({scenario!r}), duration={duration!r}, contact={contact!r})[0]
 np.savez({out!r}, q=np.asarray(result.q), qdot=np.asarray(result.qdot), t=np.asarray(result.t),
          wall=time.perf_counter() - start, status=str(result.status),
-         steps=int(result.accepted_steps), file=jaxrail.__file__)
+         run_wall=float(result.wall_time_s), compile=float(result.compile_time_s),
+         steps=int(result.accepted_steps), module=jaxrail.__file__)
 """
 
 
 def run(root, scenario, duration, contact, out):
     """One run in a process of its own, with ``root``'s jaxrail first on the path."""
-    env = dict(os.environ, PYTHONPATH=str(root))
+    # compiled cold in both: a program cached on disk by an earlier run would hide one
+    # revision's compile time
+    env = dict(os.environ, PYTHONPATH=str(root), JAXRAIL_COMPILATION_CACHE="off")
     code = RUN.format(root=str(root), scenario=scenario, duration=duration, contact=contact,
                       out=str(out))
     subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=tempfile.gettempdir())
@@ -80,8 +86,11 @@ def main():
                            **compare(runs["against"], runs["working"])}
                     for label, r in runs.items():
                         row[label] = {"wall_s": float(r["wall"]), "status": str(r["status"]),
+                                      "run_wall_s": float(r["run_wall"]),
+                                      "compile_s": float(r["compile"]),
+                                      "real_time_factor": args.duration / float(r["run_wall"]),
                                       "accepted_steps": int(r["steps"]),
-                                      "jaxrail": str(r["file"])}
+                                      "jaxrail": str(r["module"])}
                     out["runs"].append(row)
                     print(json.dumps(row), file=sys.stderr)
         finally:

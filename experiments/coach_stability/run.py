@@ -1,0 +1,120 @@
+"""The complete coach's critical speed with and without its yaw dampers, and the
+gradient of the linear critical speed in the yaw dampers' damping against central
+differences.
+
+The coach (`jaxrail/vehicles/data/coach.toml`, the Manchester benchmark vehicle 1 with
+air springs, yaw dampers, lateral dampers, anti-roll bar, bump stops and traction rods)
+on ideal straight track, S1002 on UIC60 1:40, friction 0.4, the contact table.
+"Without yaw dampers" sets their series stiffness to 1 N/m: they stay in the model and
+carry no force (a Maxwell element's force is at most k_s times its deflection).
+
+Writes ``results.json`` beside this file (``--out`` to change it) and prints it.
+Usage: ``python experiments/coach_stability/run.py [--nonlinear LO:HI] [--out FILE]``.
+"""
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import jaxrail
+
+jaxrail.enable_float64()
+
+from jaxrail.scenarios import parse_scenario  # noqa: E402
+from jaxrail.simulation import SolverOptions  # noqa: E402
+from jaxrail.stability.critical import LinearStability  # noqa: E402
+from jaxrail.stability.report import nonlinear_study, speed_range  # noqa: E402
+from jaxrail.vehicles import contact_model, get_values, set_values  # noqa: E402
+
+SCENARIO = """
+name = "coach-straight"
+description = "the complete coach on ideal straight track"
+[vehicle]
+model = "coach"
+[contact]
+friction = 0.4
+[track]
+segments = [{ kind = "straight", length = 3000.0 }]
+[run]
+speed = 40.0
+duration = 10.0
+[solver]
+rtol = 1e-4
+atol = 1e-7
+integrator = "imex"
+"""
+YAW = "yaw_damper.damping"
+SERIES = "yaw_damper.series_stiffness"
+SPEEDS = (10.0, 160.0)  # [m/s] the range searched for the crossing
+RELATIVE_STEP = 1e-2  # central differences at c (1 +- this)
+
+
+def linear(stability, params, points=8):
+    """(critical SpeedPoint, root locus) of one parameter set."""
+    import numpy as np
+
+    locus = stability.sweep(np.linspace(*SPEEDS, points), params)
+    return stability.critical_speed(*SPEEDS, params, points=locus), locus
+
+
+def point_dict(p):
+    return {"speed_m_s": p.speed, "speed_km_h": 3.6 * p.speed,
+            "frequency_hz": p.frequency_hz, "damping_ratio": p.damping_ratio,
+            "eigenvalue": [p.eigenvalue.real, p.eigenvalue.imag]}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--nonlinear", help="also the nonlinear critical speed in LO:HI m/s")
+    parser.add_argument("--out", default=str(Path(__file__).with_name("results.json")))
+    args = parser.parse_args()
+    start = time.perf_counter()
+    scenario = parse_scenario(SCENARIO, "coach-straight")
+    vehicle, params, track = scenario.build()
+    model = contact_model("table", vehicle, params)
+    stability = LinearStability(vehicle, params, track, model)
+    out = {"experiment": "coach_stability", "load_before": os.getloadavg()}
+    c0 = float(get_values(vehicle, params, [YAW])[0])
+    out["yaw_damping_N_s_m"] = c0
+
+    shipped, locus = linear(stability, params)
+    out["linear_with_yaw_dampers"] = point_dict(shipped)
+    out["root_locus_with"] = [point_dict(p) for p in locus]
+    without = set_values(vehicle, params, [SERIES], [1.0])
+    bare, locus = linear(stability, without)
+    out["linear_without_yaw_dampers"] = point_dict(bare)
+    out["root_locus_without"] = [point_dict(p) for p in locus]
+    print(json.dumps({k: out[k] for k in ("linear_with_yaw_dampers",
+                                         "linear_without_yaw_dampers")}), file=sys.stderr)
+
+    gradient = stability.critical_speed_gradient(shipped, [YAW], params)[YAW]
+    h = RELATIVE_STEP * c0
+    sides = [linear(stability, set_values(vehicle, params, [YAW], [c0 + s]))[0].speed
+             for s in (h, -h)]
+    central = (sides[0] - sides[1]) / (2.0 * h)
+    out["gradient"] = {"implicit_m_s_per_N_s_m": gradient,
+                       "central_difference_m_s_per_N_s_m": central,
+                       "relative_step": RELATIVE_STEP,
+                       "relative_difference": abs(gradient / central - 1.0)}
+    print(json.dumps(out["gradient"]), file=sys.stderr)
+
+    if args.nonlinear:
+        low, high = speed_range(args.nonlinear, "--nonlinear")
+        options = SolverOptions(rtol=scenario.rtol, atol=scenario.atol, integrator="imex",
+                                jacobian_every=scenario.jacobian_every)
+        for label, p in (("with", params), ("without", without)):
+            out[f"nonlinear_{label}_yaw_dampers"] = nonlinear_study(
+                vehicle, p, track, low, high, rate=5.0 / 3.6, resolution=1.0,
+                options=options, model=model,
+                progress=lambda line: print(line, file=sys.stderr))
+    out["wall_s"] = time.perf_counter() - start
+    out["load_after"] = os.getloadavg()
+    Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
+    print(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()
