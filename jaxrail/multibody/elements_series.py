@@ -44,7 +44,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import quaternion as qt
-from ._values import float64_array
+from ._values import checked_scalar, element_label, float64_array
 from .element_geometry import line_length, separation
 from .pchip import check_table, extend_table, monotone_slopes, value_and_integral
 
@@ -121,11 +121,10 @@ class AirSpringParams(eqx.Module):
     preload: Float[Array, " k"]
 
 
-def _positive(values, what, name):
-    values = np.asarray(values, dtype=float)
-    if not np.all(np.isfinite(values) & (values > 0.0)):
-        raise ValueError(f"{what}: {name} must be positive, got {values.tolist()}")
-    return values
+def _positive(specs, what, name):
+    """The field ``name`` of each element, each checked > 0 (the error names it)."""
+    return [checked_scalar(getattr(s, name), f"{element_label(what, s, n)} {name}",
+                           positive=True) for n, s in enumerate(specs)]
 
 
 # ---- the Maxwell damper ----------------------------------------------------------
@@ -163,7 +162,7 @@ def _maxwell_power(s, sdot, e, z):
 def _damper_table(spec, what):
     """(forces, velocities) of one damper: its characteristic, or the linear one."""
     if spec.velocities is None and spec.forces is None:
-        c = _positive([spec.damping], what, "damping")[0]
+        c = checked_scalar(spec.damping, f"{what} damping", positive=True)
         return np.array([-1.0, 1.0]) * c, np.array([-1.0, 1.0])
     if spec.velocities is None or spec.forces is None:
         raise ValueError(f"{what}: a characteristic needs both velocities and forces")
@@ -180,8 +179,7 @@ def _maxwell_params(specs, what):
     return MaxwellDamperParams(
         point_i=float64_array([s.point_i for s in specs]),
         point_j=float64_array([s.point_j for s in specs]),
-        series_stiffness=float64_array(_positive([s.series_stiffness for s in specs], what,
-                                                 "series_stiffness")),
+        series_stiffness=float64_array(_positive(specs, what, "series_stiffness")),
         free_length=float64_array([s.free_length for s in specs]),
         forces=f, velocities=v, slopes=m,
     )
@@ -220,7 +218,7 @@ def _air_power(s, sdot, e, z):
 
 def _air_params(specs, what):
     def positive(name):
-        return float64_array(_positive([getattr(s, name) for s in specs], what, name))
+        return float64_array(_positive(specs, what, name))
 
     return AirSpringParams(
         point_i=float64_array([s.point_i for s in specs]),
