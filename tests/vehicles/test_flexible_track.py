@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from jaxrail.multibody import rhs
+from jaxrail.multibody import State, rhs
 from jaxrail.multibody.imex import _pack, _unpack
 from jaxrail.scenarios import parse_scenario
 from jaxrail.simulation import SolverOptions, simulate, solve
@@ -52,7 +52,8 @@ def _wheel_load(params):
 
 
 def test_the_rails_rest_at_the_wheel_load_over_the_support_stiffness(wheelset):
-    vehicle, params, track, (q, qdot, (w, wdot)) = wheelset
+    vehicle, params, track, state = wheelset
+    w, wdot = state.track
     support = track.support
     load = _wheel_load(params)
     vertical = np.asarray(w)[0, :, 1]
@@ -93,9 +94,9 @@ def test_vertical_modes_are_those_of_the_two_mass_model(wheelset):
     # the linearised contact at rest (eq. 17 at zero penetration rate: (1 + c_e)/2 of
     # Hertz, docs/normal-forces.md) from the wheel load and the rest penetration
     from jaxrail.simulation import _wheel_outputs
-    rails = (state[2][0], state[2][1])
     outputs = jax.jit(lambda a, b, r: _wheel_outputs(vehicle, params, track, a, b, r,
-                                                      OnlineContact()))(state[0], state[1], rails)
+                                                      OnlineContact()))(state.q, state.qdot,
+                                                                        state.track)
     active = np.asarray(outputs.active)[0, 0]
     delta = float(np.asarray(outputs.penetration)[0, 0][active][0])
     assert np.sum(active) == 1
@@ -127,10 +128,10 @@ def _drop(vehicle, params, track, state, drop):
     rails, if flexible, unloaded; Tsit5 on rigid rails, IMEX on the flexible track):
     ``(Q, delta, N)`` at the largest wheel load Q [N]:
     the deepest patch's penetration [m] and its normal force [N] there."""
-    q, qdot = np.array(state[0]), np.array(state[1])
+    q, qdot = np.array(state.q), np.array(state.qdot)
     q[2] += drop
-    initial = (q, qdot) if track.support is None else (q, qdot, tuple(
-        np.zeros_like(x) for x in state[2]))
+    initial = State.of(q, qdot, None if track.support is None else tuple(
+        np.zeros_like(x) for x in state.track))
     fall = np.sqrt(2.0 * drop / G)
     # IMEX on the flexible track: the rails' modes are implicit with their wheelset's
     integrator = "tsit5" if track.support is None else "imex"
@@ -163,8 +164,8 @@ def test_peak_load_of_a_dropped_wheelset(wheelset, flexible):
     load = _wheel_load(params)
     half = load / G
     from jaxrail.simulation import _wheel_outputs
-    outputs = eqx.filter_jit(_wheel_outputs)(vehicle, params, track, state[0], state[1],
-                                             state[2], OnlineContact())
+    outputs = eqx.filter_jit(_wheel_outputs)(vehicle, params, track, state.q, state.qdot,
+                                             state.track, OnlineContact())
     delta = float(np.nanmax(np.asarray(outputs.penetration)[0, 0]))
     c_e = float(params.contact.normal_law.restitution)
     at_rest = 2.0 * load / ((1.0 + c_e) * delta**1.5)  # eq. 17 at rest: (1 + c_e)/2 of K
@@ -173,7 +174,7 @@ def test_peak_load_of_a_dropped_wheelset(wheelset, flexible):
     # the unloaded rail (the rigid one's place) by the drop less the rest penetration
     # and the rail's rest deflection
     drop = 5e-4  # [m]: hits the rails at 0.08 m/s
-    gap = drop - delta + float(np.asarray(state[2][0])[0, 0, 1])
+    gap = drop - delta + float(np.asarray(state.track[0])[0, 0, 1])
 
     def estimate(hertz):
         def left(force):  # the fall's energy left after storing ``force`` [N]

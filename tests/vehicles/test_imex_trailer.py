@@ -67,9 +67,9 @@ def wheelset():
                               .read_text())
     vehicle, params, track = scenario.build()
     # compiled: twice as fast as eager
-    q, qdot = eqx.filter_jit(initial_state)(vehicle, params, track, scenario.speed, 0.004,
-                                            None, OnlineContact())
-    return vehicle, params, track, q, qdot
+    state = eqx.filter_jit(initial_state)(vehicle, params, track, scenario.speed, 0.004,
+                                          None, OnlineContact())
+    return vehicle, params, track, state.q, state.qdot
 
 
 def test_wheelset_load_jacobian_equals_brute_force_ad(wheelset):
