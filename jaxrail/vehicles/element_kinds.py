@@ -134,14 +134,15 @@ def mirrored(cls, field: str, value):
     if value is None:
         return None
     array = np.asarray(value, dtype=np.float64)
+    # + 0.0: the mirror image of a zero is +0.0, not the -0.0 of 0.0 * -1
     if signs is not None:
-        return (array * np.asarray(signs)).tolist()
+        return (array * np.asarray(signs) + 0.0).tolist()
     if field.startswith("axis") and array.shape == (3,):
         return (REFLECT @ array).tolist()
     if field.startswith("frame") and array.shape == (3, 3):
         return (REFLECT @ array @ REFLECT).tolist()
     if field == "preload" and array.shape == (6,):
-        return (array * np.asarray(MIRROR_SIX)).tolist()
+        return (array * np.asarray(MIRROR_SIX) + 0.0).tolist()
     return value
 
 

@@ -4,6 +4,10 @@ under gravity and the wheel-rail loads, simulated by :func:`jaxrail.simulation.s
 For tests and studies (Klingel's kinematic hunting, contact dynamics). Mass data: the
 Manchester benchmark wheelset, 1813 kg [V-src]; inertias Ixx = Izz = 1120, Iyy = 112
 kg m^2 [R, recalled] (shared/reference/vehicle.md).
+
+The built-in vehicle file ``single-wheelset`` (``data/single-wheelset.toml``, what
+scenarios build) is :func:`single_wheelset` on S1002 / UIC60 1:40, number for number
+(tests/vehicles/test_vehicle_file.py).
 """
 
 import jax

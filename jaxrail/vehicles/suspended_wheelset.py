@@ -23,6 +23,10 @@ the origin heading along +x (``Track.from_segments([Arc(length, R, direction)])`
 revolute joint to the ground there, so the frame runs round the circle of radius R at
 its height, radial to it, and the wheelset curves against Wickens' frame (no cant: the
 frame does not roll with the track).
+
+The built-in vehicle file ``suspended-wheelset`` (``data/suspended-wheelset.toml``, what
+scenarios build, through :func:`suspended_wheelset_file`) is the same vehicle, number for
+number, the curve a build option (:func:`curved_guide`; tests/vehicles/test_vehicle_file.py).
 """
 
 import dataclasses
@@ -33,6 +37,7 @@ from ..contact.search import SearchConfig
 from ..multibody import Prismatic, Revolute, RigidBody, build_system
 from ..profiles import rail_offset as profile_rail_offset
 from ..profiles import s1002, uic60
+from .from_file import read_toml, vehicle_file_path, vehicle_from_data
 from .trailer import GRAVITY, primary_bushings, trailer_values, unsprung_bodies
 from .vehicle import Vehicle, VehicleParams
 from .wheel_rail import ContactParameters
@@ -48,6 +53,54 @@ any service speed."""
 def frame_mass(values: dict) -> float:
     """Sprung mass per axle [kg]: carbody / 4 + bogie / 2 (the trailer's)."""
     return 0.25 * values["carbody.mass"] + 0.5 * values["bogie.mass"]
+
+
+def curve_centre(curve_radius, direction="left") -> float:
+    """y [m] of the centre of a curve of radius ``curve_radius`` [m] that starts at the
+    origin heading along +x and turns ``direction`` ('left' or 'right')."""
+    if not (np.isfinite(curve_radius) and curve_radius > 0.0):
+        raise ValueError(f"curve_radius must be > 0 m, got {curve_radius}")
+    if direction not in ("left", "right"):
+        raise ValueError(f"direction must be 'left' or 'right', got {direction!r}")
+    return (1.0 if direction == "left" else -1.0) * float(curve_radius)
+
+
+def curved_guide(data: dict, curve_radius, direction="left") -> dict:
+    """A copy of the parsed vehicle file ``data`` (``suspended-wheelset.toml``) whose
+    joint ``guide``, the frame's prismatic joint to the ground, is instead a revolute
+    joint to the ground about the vertical through the centre of a curve of radius
+    ``curve_radius`` [m] turning ``direction`` (module docstring), at the guide's
+    height. The joint kind is the file's structure, so the curve is a build option
+    applied to the data before :func:`~jaxrail.vehicles.vehicle_from_data`."""
+    centre = curve_centre(curve_radius, direction)
+    joints = data.get("joint", [])
+    guides = [k for k, joint in enumerate(joints) if joint.get("name") == "guide"]
+    if len(guides) != 1:
+        raise ValueError("a curve radius needs the vehicle file's one top-level [[joint]] "
+                         "named 'guide' (the frame's joint to the ground)")
+    guide = joints[guides[0]]
+    height = guide["at"][2]
+    turned = {"name": "guide", "kind": "revolute", "body_i": guide["body_i"],
+              "body_j": guide["body_j"], "axis": [0, 0, 1],
+              "at": [0, {"value": centre, "unit": "m", "tag": "A",
+                         "source": f"the centre of a {direction} curve of radius "
+                                   f"{float(curve_radius):g} m (the curve_radius build "
+                                   f"option)"}, height]}
+    return {**data, "joint": [turned if k == guides[0] else joint
+                              for k, joint in enumerate(joints)]}
+
+
+def suspended_wheelset_file(curve_radius=None, direction="left", **options
+                            ) -> tuple[Vehicle, VehicleParams]:
+    """The built-in vehicle file ``suspended-wheelset`` as ``(Vehicle, VehicleParams)``,
+    with :func:`curved_guide` where ``curve_radius`` [m] is given; ``options`` as
+    :func:`~jaxrail.vehicles.vehicle_from_file`. It builds what
+    :func:`suspended_wheelset` builds (tests/vehicles/test_vehicle_file.py)."""
+    path = vehicle_file_path("suspended-wheelset")
+    data = read_toml(path)
+    if curve_radius is not None:
+        data = curved_guide(data, curve_radius, direction)
+    return vehicle_from_data(data, where=str(path), folder=path.parent, **options)
 
 
 def suspended_wheelset(wheel=None, rail=None, values=None, config=SearchConfig(),
@@ -73,11 +126,7 @@ def suspended_wheelset(wheel=None, rail=None, values=None, config=SearchConfig()
         guide = Prismatic("ground", "frame", (0.0, 0.0, height), (0.0, 0.0, 0.0),
                           axis_i=(1.0, 0.0, 0.0), axis_j=(1.0, 0.0, 0.0), name="guide")
     else:
-        if not (np.isfinite(curve_radius) and curve_radius > 0.0):
-            raise ValueError(f"curve_radius must be > 0 m, got {curve_radius}")
-        if direction not in ("left", "right"):
-            raise ValueError(f"direction must be 'left' or 'right', got {direction!r}")
-        centre = (1.0 if direction == "left" else -1.0) * float(curve_radius)
+        centre = curve_centre(curve_radius, direction)
         guide = Revolute("ground", "frame", (0.0, centre, height), (0.0, centre, 0.0),
                          name="guide")
     # no vertical stiffness: the springs press the wheelset down with a constant force,

@@ -82,6 +82,75 @@ def test_builtin_names():
         vehicle_from_file("no-such-vehicle")
 
 
+# ---- the bogie, the single and the suspended wheelset ------------------------------------
+
+
+def _bitwise_same(file_built, python_built):
+    """Same bodies, joints, elements, wheelsets and every number, to the bit (signed
+    zeros included)."""
+    (v_file, p_file), (v_py, p_py) = file_built, python_built
+    assert v_file.system.body_names == v_py.system.body_names
+    assert v_file.system.joint_groups == v_py.system.joint_groups  # names, kinds, bodies
+    assert v_file.system.force_groups == v_py.system.force_groups
+    assert v_file.wheelsets == v_py.wheelsets and v_file.axleboxes == v_py.axleboxes
+    assert v_file == v_py
+    leaves_file, tree_file = jax.tree.flatten(p_file)
+    leaves_py, tree_py = jax.tree.flatten(p_py)
+    assert tree_file == tree_py
+    for a, b in zip(leaves_file, leaves_py):
+        a, b = np.asarray(a), np.asarray(b)
+        assert a.dtype == b.dtype and a.shape == b.shape
+        assert a.tobytes() == b.tobytes(), (a, b)
+
+
+def _python_builders():
+    from jaxrail.profiles import uic60
+    from jaxrail.vehicles import bogie, single_wheelset
+    from jaxrail.vehicles.suspended_wheelset import suspended_wheelset
+
+    return {"bogie": bogie, "suspended-wheelset": suspended_wheelset,
+            "single-wheelset": lambda: single_wheelset(s1002(), uic60("1:40"))}
+
+
+@pytest.mark.parametrize("name", ["bogie", "single-wheelset", "suspended-wheelset"])
+def test_builtin_file_builds_the_python_vehicle(name):
+    assert name in vehicle_names()
+    _bitwise_same(vehicle_from_file(name), _python_builders()[name]())
+
+
+@pytest.mark.parametrize("direction", ["left", "right"])
+def test_suspended_wheelset_file_with_a_curve_radius(direction):
+    from jaxrail.vehicles.suspended_wheelset import suspended_wheelset, suspended_wheelset_file
+
+    built = suspended_wheelset_file(650.0, direction)
+    _bitwise_same(built, suspended_wheelset(curve_radius=650.0, direction=direction))
+    kinds = {n: g.kind for g in built[0].system.joint_groups for n in g.names}
+    assert kinds == {"axle_1": "revolute", "guide": "revolute"}
+    with pytest.raises(ValueError, match="curve_radius must be > 0 m"):
+        suspended_wheelset_file(-1.0)
+
+
+@pytest.mark.parametrize("name", ["bogie", "suspended-wheelset"])
+def test_builtin_file_carries_the_trailers_numbers(name):
+    """The trailer's parameters by name, so that a scenario's ``[vehicle] data`` replaces
+    them; the suspended wheelset's own primary longitudinal stiffness apart."""
+    data = tomllib.loads((data_folder() / f"{name}.toml").read_text())
+    own = {"primary.longitudinal_stiffness"} if name == "suspended-wheelset" else set()
+    for key, entry in read_vehicle_data().items():
+        group, field = key.split(".")
+        if key not in own:
+            assert data["parameters"][group][field] == entry, key
+    if own:
+        assert data["parameters"]["primary"]["longitudinal_stiffness"]["value"] == 1.0e6
+
+
+@pytest.mark.parametrize("name", ["bogie", "suspended-wheelset"])
+def test_builtin_file_takes_trailer_values_as_the_python_builder_does(name):
+    values = trailer_values(carbody__mass=30000.0, primary__vertical_damping=5000.0)
+    builder = _python_builders()[name]
+    _bitwise_same(vehicle_from_file(name, parameters=values), builder(values=values))
+
+
 # ---- units --------------------------------------------------------------------------------
 
 UNITS = [  # (value, unit, SI value): hand conversions
