@@ -241,6 +241,42 @@ def test_the_suspended_wheelset_refuses_a_curved_track(tmp_path):
         load_scenario(str(path)).build()
 
 
+def test_the_suspended_wheelset_is_its_vehicle_file_straight_or_curved():
+    """The scenario builds the built-in file: a prismatic guide to the ground, or with
+    a curve radius the revolute joint about the curve's centre."""
+    scenario = load_scenario("suspended-wheelset")
+    for radius, kind in ((None, "prismatic"), (650.0, "revolute")):
+        vehicle, _, _ = scenario.build(radius)
+        kinds = {n: g.kind for g in vehicle.system.joint_groups for n in g.names}
+        assert kinds["guide"] == kind and vehicle.name == "suspended wheelset"
+
+
+@pytest.mark.parametrize("model", ["bogie", "suspended-wheelset"])
+def test_vehicle_data_replaces_the_files_parameters(model, tmp_path):
+    """``[vehicle] data`` (the trailer's old format) replaces the built-in file's
+    parameters of the same names, as it replaced the Python builders' values."""
+    import equinox as eqx
+    import jax
+
+    from jaxrail.vehicles import bogie, trailer_values
+    from jaxrail.vehicles.suspended_wheelset import suspended_wheelset
+    from jaxrail.vehicles.vehicle_file import data_folder
+
+    data = tmp_path / "heavy.toml"
+    text = (data_folder() / "manchester_trailer.toml").read_text()
+    data.write_text(text.replace("value = 32000.0", "value = 36000.0"))
+    text = MINIMAL.replace('model = "trailer"', f'model = "{model}"\ndata = "{data}"')
+    vehicle, params, _ = parse_scenario(text, str(tmp_path / "s.toml")).build()
+    values = trailer_values(data)
+    assert values["carbody.mass"] == 36000.0
+    builder = {"bogie": bogie, "suspended-wheelset": suspended_wheelset}[model]
+    vehicle_py, params_py = builder(values=values)
+    assert vehicle == vehicle_py
+    params_py = eqx.tree_at(lambda p: p.contact.friction, params_py, params.contact.friction)
+    for a, b in zip(jax.tree.leaves(params), jax.tree.leaves(params_py)):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
 def test_a_scenario_names_a_vehicle_file_relative_to_itself(tmp_path):
     """``[vehicle] file`` is read relative to the scenario, and the built-in name
     ``trailer`` is that same vehicle file: the two build the same vehicle, number for

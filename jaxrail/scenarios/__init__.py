@@ -27,9 +27,9 @@ from .irregularities import IrregularitySpec, parse_irregularities
 from ..simulation import INTEGRATORS, SolverOptions, run_span, simulate
 from ..track import Arc, Straight, Track, Transition
 from ..track.flexible import FlexibleTrack
-from ..vehicles import CONTACT_MODELS, bogie, contact_model, single_wheelset
+from ..vehicles import CONTACT_MODELS, contact_model
 from ..vehicles.from_file import vehicle_from_file, vehicle_names
-from ..vehicles.suspended_wheelset import suspended_wheelset
+from ..vehicles.suspended_wheelset import suspended_wheelset_file
 from ..vehicles.trailer import trailer_values
 
 __all__ = ["BUILTIN", "Scenario", "load_scenario", "parse_scenario", "prepare_scenario",
@@ -41,9 +41,6 @@ BUILTIN = ("paper-curve", "paper-curve-simplified", "paper-curve-irregular", "st
 _SEGMENTS = {"straight": (Straight, {"length"}),
              "transition": (Transition, {"length"}),
              "arc": (Arc, {"length", "radius", "direction", "cant"})}
-_BUILDERS = ("bogie", "single-wheelset", "suspended-wheelset")
-"""The vehicles still built in Python; every other ``[vehicle] model`` is a built-in
-vehicle file (:func:`jaxrail.vehicles.vehicle_names`, the trailer among them)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -148,24 +145,20 @@ class Scenario:
         """``(vehicle, params, track)``. ``curve_radius`` [m]: build the suspended wheelset
         for a left curve of that radius (its frame turning about the curve's centre) and
         leave the scenario's track to the caller (the stability analysis in a curve)."""
-        wheel, rail = self._profile("wheel"), self._profile("rail")
-        if self.vehicle_file is not None or self.model not in _BUILDERS:
-            values = None if self.vehicle_data is None else trailer_values(self.vehicle_data)
-            vehicle, params = vehicle_from_file(self.vehicle_file or self.model, wheel=wheel,
-                                                rail=rail, parameters=values)
-        elif self.model == "bogie":
-            vehicle, params = bogie(wheel, rail, trailer_values(self.vehicle_data))
-        elif self.model == "suspended-wheelset":
+        # every model is a built-in vehicle file; [vehicle] data replaces its named
+        # parameters (the suspended wheelset's primary longitudinal stiffness included)
+        values = None if self.vehicle_data is None else trailer_values(self.vehicle_data)
+        options = {"wheel": self._profile("wheel"), "rail": self._profile("rail"),
+                   "parameters": values}
+        if self.model == "suspended-wheelset":
             curved = [k + 1 for k, seg in enumerate(self.segments) if seg["kind"] != "straight"]
             if curved and curve_radius is None:
                 raise ValueError(f"{self.source}: [vehicle] model = 'suspended-wheelset' runs "
                                  f"on straight track only (its frame slides along the "
                                  f"global x axis); track segments {curved} are not straight")
-            # a data file gives its own values, the primary longitudinal stiffness included
-            values = None if self.vehicle_data is None else trailer_values(self.vehicle_data)
-            vehicle, params = suspended_wheelset(wheel, rail, values, curve_radius=curve_radius)
+            vehicle, params = suspended_wheelset_file(curve_radius, **options)
         else:
-            vehicle, params = single_wheelset(wheel, rail)
+            vehicle, params = vehicle_from_file(self.vehicle_file or self.model, **options)
         params = eqx.tree_at(lambda p: p.contact.friction, params, self.friction)
         return vehicle, params, self.track()
 
@@ -243,17 +236,17 @@ def _vehicle_path(vehicle, key, where):
 
 
 def _profile_name(vehicle, key, where):
-    """``[vehicle] wheel`` or ``rail``: required for the vehicles built in Python; a
-    vehicle file names its own, which the scenario's replaces where given."""
-    if key not in vehicle and vehicle.get("model") not in _BUILDERS:
+    """``[vehicle] wheel`` or ``rail``: optional; a vehicle file names its own, which
+    the scenario's replaces where given."""
+    if key not in vehicle:
         return None
     return checks.text(vehicle, key, where, "[vehicle]")
 
 
 def _vehicle_model(vehicle, where):
-    """``[vehicle] model``: a vehicle built in Python or a built-in vehicle file's name
-    (default ``"trailer"`` where a ``file`` is given, which it names instead)."""
-    models = _BUILDERS + tuple(vehicle_names())
+    """``[vehicle] model``: a built-in vehicle file's name (``"file"`` where a ``file``
+    is given, which it names instead)."""
+    models = tuple(vehicle_names())
     if "file" in vehicle:
         if "model" in vehicle:
             raise ValueError(f"{where}: [vehicle] give a model or a file, not both")
