@@ -5,6 +5,9 @@ compiled loop of 50 chained steps, as ``benchmarks/rhs_profile.py`` times its
 ``imex_step``: the module ``jaxrail/multibody/imex.py`` of ``--against`` (a git
 revision) is loaded beside the working tree's, both are compiled, and their timings are
 interleaved over ``--rounds`` rounds so that the machine's drift falls on both alike.
+Both steps take the one term (``VehicleLoads``) as diffrax's ``args``, so ``--against``
+must be a revision whose IMEX does too (from the commit that made the system, its
+parameters and the loads one term, ``jaxrail.multibody.AbstractLoads``, on).
 Prints JSON: the median µs per step of each, their ratio, the operations in each
 optimised program, the relative difference of the loop's output sums, and the load.
 
@@ -51,9 +54,7 @@ def compiled_steps(module, q, qdot, data, structure):
         vehicle, params, track, model = eqx.combine(data, structure)
         loads = profile.VehicleLoads(vehicle, params, track, model)
         return module.IMEX().step(diffrax.ODETerm(multibody_rhs), 0.0, profile.IMEX_STEP,
-                                  profile.State.of(q, qdot),
-                                  (vehicle.system, params.system, loads), None,
-                                  False)[0]
+                                  profile.State.of(q, qdot), loads, None, False)[0]
 
     return profile.compiled_loop(step, (q, qdot, data))
 

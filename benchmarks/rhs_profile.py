@@ -63,7 +63,7 @@ enable_float64()
 
 from jaxrail.multibody import State, accelerations, rhs as multibody_rhs  # noqa: E402
 from jaxrail.multibody.imex import IMEX, stiff_jacobian  # noqa: E402
-from jaxrail.multibody.system import project_state  # noqa: E402
+from jaxrail.multibody import project_state  # noqa: E402
 from jaxrail.scenarios import load_scenario  # noqa: E402
 from jaxrail.contact.table_cache import contact_table  # noqa: E402
 from jaxrail.track import FlexibleTrack  # noqa: E402
@@ -159,19 +159,19 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
         if rails is None:
             return vehicle_accelerations(vehicle, params, track, 0.0, q, qdot, model)
         loads = VehicleLoads(vehicle, params, track, model)
-        return multibody_rhs(0.0, State.of(q, qdot, rails), (vehicle.system, params.system, loads))
+        return multibody_rhs(0.0, State.of(q, qdot, rails), loads)
 
     @parts_of
     def imex_step(q, qdot, vehicle, params, track, model, rails):
         loads = VehicleLoads(vehicle, params, track, model)
         y0 = State.of(q, qdot, rails)
-        return IMEX().step(diffrax.ODETerm(multibody_rhs), 0.0, IMEX_STEP, y0,
-                           (vehicle.system, params.system, loads), None, False)[0]
+        return IMEX().step(diffrax.ODETerm(multibody_rhs), 0.0, IMEX_STEP, y0, loads, None,
+                           False)[0]
 
     @parts_of
     def imex_jacobian(q, qdot, vehicle, params, track, model, rails):
         loads = VehicleLoads(vehicle, params, track, model)
-        return stiff_jacobian(vehicle.system, params.system, 0.0, State.of(q, qdot, rails), loads)
+        return stiff_jacobian(0.0, State.of(q, qdot, rails), loads)
 
     # a load Jacobian at the start, for a step that keeps it (IMEX's jacobian_every)
     kept = jax.jit(imex_jacobian)(q, qdot, data)[1]
@@ -180,8 +180,7 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
     def imex_step_kept(q, qdot, vehicle, params, track, model, rails):
         loads = VehicleLoads(vehicle, params, track, model)
         y0 = State.of(q, qdot, rails)
-        solver, term, args = IMEX(jacobian_every=8), diffrax.ODETerm(multibody_rhs), (
-            vehicle.system, params.system, loads)
+        solver, term, args = IMEX(jacobian_every=8), diffrax.ODETerm(multibody_rhs), loads
         euler = solver.init(term, 0.0, IMEX_STEP, y0, args)[2]
         # one step old: kept and turned; an age known only at run time, as in a run (a
         # constant one would let XLA drop the Jacobian's branch from the program)

@@ -29,9 +29,8 @@ from ._compiler import compile_function
 from ._lru import LruCache
 from ._progress import SimulatedTimeBar
 from ._time_report import TimeReportingMeter, listening
-from .multibody import State, accelerations, constraints, simulate_system
+from .multibody import FixedLoads, State, accelerations, constraints, simulate_system
 from .multibody import initial_state as system_initial_state
-from .multibody.system import FixedLoads
 from .multibody.imex import IMEX, JacobianCounter, check_jacobian_every
 from .track import to_track_coordinates, track_frame
 from .track.irregularity import rail_offsets
@@ -315,26 +314,27 @@ def _wheel_outputs(vehicle, params, track, q, qdot, rails, model):
     return _outputs(vehicle, params, track, q, qdot, rails, model)[0]
 
 
-def _integrate(vehicle, params, track, loads, start, rest_heights, t1, ts, options,
-               limits, solver, adjoint, report=False):
-    """diffrax's Solution of eq. (19) from the :class:`State` ``start`` at 0 to t1 [s]
-    with ``solver``, saved at ``ts``, stopped by the derailment event (a flexible
+def _integrate(loads, start, rest_heights, t1, ts, options, limits, solver, adjoint,
+               report=False):
+    """diffrax's Solution of eq. (19) under ``loads`` (:class:`VehicleLoads`: the
+    vehicle, its parameters, the track) from the :class:`State` ``start`` at 0 to t1
+    [s] with ``solver``, saved at ``ts``, stopped by the derailment event (a flexible
     track's rails and the elements' internal states are integrated with the bodies);
-    ``report``: each accepted
-    step's time to the host (:class:`TimeReportingMeter`). With IMEX the controller
-    counts its load Jacobians (:class:`JacobianCounter`, the saved controller state)."""
+    ``report``: each accepted step's time to the host (:class:`TimeReportingMeter`).
+    With IMEX the controller counts its load Jacobians (:class:`JacobianCounter`, the
+    saved controller state)."""
     controller, dt0 = options.controller()
     counting = isinstance(solver, IMEX)
     if counting:
         controller = JacobianCounter(controller, solver.jacobian_every)
     return simulate_system(
-        vehicle.system, params.system, start.q, start.qdot, t1, dt0=dt0,
+        loads, start.q, start.qdot, t1, dt0=dt0,
         saveat=diffrax.SaveAt(ts=ts, controller_state=counting), rtol=options.rtol,
         atol=options.atol, solver=solver,
-        external=loads, max_steps=options.max_steps, adjoint=adjoint, throw=False,
+        max_steps=options.max_steps, adjoint=adjoint, throw=False,
         stepsize_controller=controller,
-        event=_stop_events(vehicle, track, limits, rest_heights), track0=start.track,
-        elements0=start.elements,
+        event=_stop_events(loads.vehicle, loads.track, limits, rest_heights),
+        track0=start.track, elements0=start.elements,
         progress_meter=TimeReportingMeter(t1) if report else None)
 
 
@@ -439,8 +439,8 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
         vehicle, track, start.q, start.qdot)
     ts = jnp.linspace(0.0, t1, options.n_outputs)
     solver = options.solver() if solver is None else solver
-    sol = _integrate(vehicle, params, track, loads, start, rest_heights, t1, ts, options,
-                     limits, solver, adjoint, report_progress)
+    sol = _integrate(loads, start, rest_heights, t1, ts, options, limits, solver, adjoint,
+                     report_progress)
     # a state that only turned non-finite is not derailed: diffrax's event_occurred
     # result makes the status "failed"
     derailed = sol.event_mask[0] | _starts_derailed(limits, lateral0, irregularity0,

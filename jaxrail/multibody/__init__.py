@@ -3,7 +3,9 @@
 stabilisation integrated by diffrax. See docs/multibody.md.
 
 Static structure (`System`) and traced parameters (`SystemParams`) come from
-`build_system`; the Euler-parameter helpers are in `jaxrail.multibody.quaternion`.
+`build_system`; a solve takes them with the loads on the bodies as one term
+(`SystemLoads`, or any `AbstractLoads`); the Euler-parameter helpers are in
+`jaxrail.multibody.quaternion`.
 """
 
 from . import quaternion as quaternion
@@ -38,40 +40,45 @@ from .joints import Revolute as Revolute
 from .joints import Spherical as Spherical
 from .system import System as System
 from .system import SystemParams as SystemParams
-from .system import acceleration_response as acceleration_response
-from .system import accelerations as accelerations
-from .system import accelerations_dense as accelerations_dense
-from .system import angular_momentum as angular_momentum
 from .system import build_system as build_system
-from .system import consistent_initial_conditions as consistent_initial_conditions
-from .system import constraint_violation as constraint_violation
-from .system import constraints as constraints
-from .system import generalized_forces as generalized_forces
-from .system import kinetic_energy as kinetic_energy
-from .system import mass_matrix as mass_matrix
-from .system import potential_energy as potential_energy
-from .system import quadratic_velocity as quadratic_velocity
-from .system import rhs as rhs
-from .system import dissipated_power as dissipated_power
-from .system import element_rates as element_rates
-from .system import initial_element_states as initial_element_states
-from .system import initial_state as initial_state
+from .equations import acceleration_response as acceleration_response
+from .equations import accelerations as accelerations
+from .equations import accelerations_dense as accelerations_dense
+from .equations import constraints as constraints
+from .equations import element_rates as element_rates
+from .equations import generalized_forces as generalized_forces
+from .equations import initial_element_states as initial_element_states
+from .equations import initial_state as initial_state
+from .equations import mass_matrix as mass_matrix
+from .equations import quadratic_velocity as quadratic_velocity
+from .diagnostics import angular_momentum as angular_momentum
+from .diagnostics import constraint_violation as constraint_violation
+from .diagnostics import dissipated_power as dissipated_power
+from .diagnostics import kinetic_energy as kinetic_energy
+from .diagnostics import potential_energy as potential_energy
+from .projection import consistent_initial_conditions as consistent_initial_conditions
+from .projection import project_state as project_state
+from .loads import AbstractLoads as AbstractLoads
+from .loads import FixedLoads as FixedLoads
+from .loads import SystemLoads as SystemLoads
+from .integrate import rhs as rhs
+from .integrate import simulate_system as simulate_system
 from .state import State as State
 from .elements_series import AirSpring as AirSpring
 from .elements_series import MaxwellDamper as MaxwellDamper
-from .system import simulate_system as simulate_system
 
-__all__ = ["acceleration_response", "accelerations", "accelerations_dense", "AirSpring",
-           "dissipated_power", "element_rates", "initial_element_states", "initial_state",
-           "MaxwellDamper", "State",
-           "angular_momentum", "angular_velocity", "body_pose", "BodyParams",
+__all__ = ["AbstractLoads", "acceleration_response", "accelerations",
+           "accelerations_dense", "AirSpring", "dissipated_power", "element_rates",
+           "FixedLoads", "initial_element_states", "initial_state", "MaxwellDamper",
+           "State", "angular_momentum", "angular_velocity", "body_pose", "BodyParams",
            "build_system", "BumpStop", "BumpStopParams", "Bushing", "BushingParams",
            "consistent_initial_conditions", "constraint_violation", "constraints",
            "Fixed", "generalized_forces", "GROUND", "join_coordinates", "JointParams",
            "kinetic_energy", "mass_matrix", "point_position", "point_velocity",
-           "potential_energy", "Prismatic", "quadratic_velocity", "quaternion",
-           "Revolute", "rhs", "RigidBody", "simulate_system", "Spherical",
-           "split_coordinates", "SpringDamper", "SpringDamperParams", "System",
-           "SystemParams", "velocities_from_twists",
-           "AntiRollBar", "AntiRollBarParams", "FrictionDamper", "FrictionDamperParams",
-           "TableSpring", "TableSpringParams", "TractionRod", "TractionRodParams"]
+           "potential_energy", "Prismatic", "project_state", "quadratic_velocity",
+           "quaternion", "Revolute", "rhs", "RigidBody", "simulate_system",
+           "Spherical", "split_coordinates", "SpringDamper", "SpringDamperParams",
+           "System", "SystemLoads", "SystemParams", "velocities_from_twists",
+           "AntiRollBar", "AntiRollBarParams", "FrictionDamper",
+           "FrictionDamperParams", "TableSpring", "TableSpringParams", "TractionRod",
+           "TractionRodParams"]

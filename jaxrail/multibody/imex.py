@@ -35,10 +35,12 @@ solver state is dropped, so its retry evaluates J again where the attempt did;
 
 J = [[0, I], [A_q, A_v]] with y = (q, qdot): the accelerations' dependence on the
 positions and velocities of the bodies whose loads are stiff, through those loads
-only (``external.linearised``, e.g. :meth:`jaxrail.vehicles.VehicleLoads.linearised`).
+only (the term's ``linearised``, e.g. :meth:`jaxrail.vehicles.VehicleLoads.linearised`).
 A_q, A_v have 7 columns per such body, so the step inverts a (7 k, 7 k) matrix
-(28 x 28 for four wheelsets) instead of the whole state's. Without ``linearised``
-J = 0 and the method is the explicit KenCarp tableau.
+(28 x 28 for four wheelsets) instead of the whole state's. Loads with no stiff bodies
+(:class:`~jaxrail.multibody.loads.AbstractLoads`' default ``linearised``, e.g.
+:class:`~jaxrail.multibody.loads.SystemLoads`) give J = 0, and the method is the
+explicit KenCarp tableau.
 """
 
 from typing import ClassVar
@@ -50,10 +52,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._when import computed_when, zeros_of
+from .equations import acceleration_response, accelerations, element_rates
+from .loads import AbstractLoads, FixedLoads
+from .projection import project_state
 from .quaternion import multiply
 from .state import State
-from .system import (FixedLoads, acceleration_response, accelerations, element_rates,
-                     project_state, rhs)
 
 METHODS = {"KenCarp3": 3, "KenCarp4": 4, "KenCarp5": 5}
 
@@ -144,40 +147,37 @@ class StiffJacobian(eqx.Module):
         return b_q + hg * x_v, x_v, b_z
 
 
-def stiff_jacobian(system, params, t, y: State, external, jacobian=True):
-    """(f(y) packed (:func:`_pack`), :class:`StiffJacobian`) at the :class:`State` y.
+def stiff_jacobian(t, y: State, loads: AbstractLoads, jacobian=True):
+    """(f(y) packed (:func:`_pack`), :class:`StiffJacobian`) at the :class:`State` y
+    under ``loads`` (the system, its parameters and the loads on its bodies).
 
     ``jacobian``: a bool, which may be traced, or a tuple of them that must all hold
     (:func:`~jaxrail.multibody._when.computed_when`): where it is False, J's entries are
     zeros, not computed, so that a loop of stages of which only the first needs J
     evaluates the loads at one place (:class:`IMEX`). It is passed on as
-    ``external.linearised(..., jacobian=...)``: an ``external`` takes that keyword (it
-    may ignore it and return its blocks anyway).
+    ``loads.linearised(..., jacobian=...)``, which may ignore it and return its blocks
+    anyway.
 
-    ``external.linearised(t, q, qdot)`` returns ``(forces, torques, bodies, blocks)``:
-    the loads as ``external(t, q, qdot)`` does, the indices of the bodies with stiff
-    loads (static) and ``blocks`` (k, 7, 14), the derivative of each such body's
-    generalized load with respect to its own (q, qdot) (7 + 7 coordinates). The contact
-    is evaluated once for both. Without it, J = 0.
+    ``loads.linearised(t, q, qdot)`` returns ``(forces, torques, bodies, blocks)``:
+    the loads as ``loads(t, q, qdot)`` does, the indices of the bodies with stiff
+    loads (static; none: J = 0) and ``blocks`` (k, 7, 14), the derivative of each such
+    body's generalized load with respect to its own (q, qdot) (7 + 7 coordinates). The
+    contact is evaluated once for both.
 
     With a flexible track ``y.track = (x, xdot)`` (second order, (k, ...) per stiff
-    body), ``external.linearised(t, q, qdot, track)`` returns ``(forces, torques,
+    body), ``loads.linearised(t, q, qdot, track)`` returns ``(forces, torques,
     track_dot, bodies, blocks, state_rows)``: ``blocks`` (k, 7, 2 (7 + r)) and
     ``state_rows`` (k, r, 2 (7 + r)) the derivatives of each body's load and of its r
     states' accelerations by its (q, x, qdot, xdot). The force elements' internal
     states are explicit: J is zero on them."""
     q, qdot, track = y.q, y.qdot, y.track
-    linearised = getattr(external, "linearised", None)
-    if linearised is None:
-        n7 = q.shape[0]
-        empty = jnp.zeros((n7, 0), dtype=q.dtype)
-        return _pack(rhs(t, y, (system, params, external))), StiffJacobian((), empty, empty)
+    system, params = loads.system, loads.system_params
     if track is None:
-        forces, torques, bodies, blocks = linearised(t, q, qdot, jacobian=jacobian)
+        forces, torques, bodies, blocks = loads.linearised(t, q, qdot, jacobian=jacobian)
         state_rows = jnp.zeros(blocks.shape[:1] + (0, 14), dtype=q.dtype)
         f_track = None
     else:
-        forces, torques, f_track, bodies, blocks, state_rows = linearised(
+        forces, torques, f_track, bodies, blocks, state_rows = loads.linearised(
             t, q, qdot, track, jacobian=jacobian)
     qddot, _ = accelerations(system, params, t, q, qdot, FixedLoads(forces, torques),
                              y.elements)
@@ -318,8 +318,9 @@ class JacobianCounter(diffrax.AbstractStepSizeController):
 
 class IMEX(diffrax.AbstractAdaptiveSolver):
     """The linearly implicit additive Runge-Kutta method of the module docstring for
-    :func:`jaxrail.multibody.rhs` (``args = (system, params, external)``): the stiff
-    loads of ``external.linearised`` implicit, the rest explicit. ``method``: one of
+    :func:`jaxrail.multibody.rhs` (``args``: the term, an
+    :class:`~jaxrail.multibody.loads.AbstractLoads`): the stiff loads of its
+    ``linearised`` implicit, the rest explicit. ``method``: one of
     :data:`METHODS` (order 3, 4 or 5, with an embedded solution one order lower for
     the step-size controller). ``jacobian_every``: a new load Jacobian every this many
     accepted steps, kept and turned with the stiff bodies in between (module
@@ -356,19 +357,15 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         bodies' Euler parameters where J holds): a zero J as old as forces a new one."""
         if self.jacobian_every == 1:
             return None
-        system, params, *rest = args
         like = y0
 
         def jacobian_at(y):
-            return stiff_jacobian(system, params, t0, _unpack(like, y),
-                                  rest[0] if rest else None)[1]
+            return stiff_jacobian(t0, _unpack(like, y), args)[1]
         jac = zeros_of(jax.eval_shape(jacobian_at, _pack(y0)))
         return jac, jnp.asarray(self.jacobian_every, jnp.int32), _euler(jac, _pack(y0)[0])
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
         del made_jump
-        system, params, *rest = args
-        external = rest[0] if rest else None
         c, a_e, a_i, b, b_error, gamma = _tableau(self.method)
         s = b.size
         h = t1 - t0
@@ -377,7 +374,7 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
 
         def evaluate(i, y):
             """(f(y), J) at stage i: J (computed at the first stage only) at y0."""
-            return stiff_jacobian(system, params, t0 + c[i] * h, _unpack(like, y), external,
+            return stiff_jacobian(t0 + c[i] * h, _unpack(like, y), args,
                                   jacobian=(i == 0, refresh))
 
         # per stage i: rows i and s + i hold the explicit part f(Y_i) - J (Y_i - y0) and
@@ -425,7 +422,8 @@ class IMEX(diffrax.AbstractAdaptiveSolver):
         # 1 um over the paper's curve (Tsit5's shorter steps: nm); one projection per
         # step keeps them at the explicit method's level.
         y1 = _unpack(like, y1)
-        y1 = y1.with_bodies(*project_state(system, params, y1.q, y1.qdot))
+        y1 = y1.with_bodies(*project_state(args.system, args.system_params, y1.q,
+                                           y1.qdot))
         error = _unpack(like, jax.tree.map(lambda d: h * d,
                                            _weighted(both(b_error), parts)))
         # An inverse that is not finite (a non-finite or singular I - h gamma J) ends

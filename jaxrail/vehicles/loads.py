@@ -26,7 +26,7 @@ import numpy as np
 from ..contact.search import search_wheelset
 from ..contact.table import ContactTable, table_patches
 from ..contact.table_cache import contact_table
-from ..multibody import accelerations
+from ..multibody import AbstractLoads, accelerations
 from ..multibody import quaternion as qt
 from ..multibody._when import computed_when
 from ..multibody.forces import body_torque
@@ -215,10 +215,12 @@ def _rails_rate(track, rails, patches, patch_forces):
     return rate, track.support.accelerations(deflection, rate, loads)
 
 
-class VehicleLoads(eqx.Module):
-    """The loads on a vehicle's bodies as the ``external`` hook of
-    :func:`jaxrail.multibody.accelerations`: ``loads(t, q, qdot)`` returns forces and
-    torques ``(n, 3)`` [N, N m], global, at the body centres.
+class VehicleLoads(AbstractLoads):
+    """The loads on a vehicle's bodies with the vehicle's system: the one term of the
+    multibody solve (:class:`~jaxrail.multibody.AbstractLoads`; the system and its
+    parameters are ``vehicle.system`` and ``params.system``, so they enter once).
+    ``loads(t, q, qdot)`` returns forces and torques ``(n, 3)`` [N, N m], global, at
+    the body centres (the ``external`` hook of :func:`jaxrail.multibody.accelerations`).
 
     Fields: vehicle, params (:class:`VehicleParams`, traced), track, model (the
     contact model), drive (a :class:`~jaxrail.vehicles.drive.SpeedDrive` holding the
@@ -231,6 +233,16 @@ class VehicleLoads(eqx.Module):
     track: object
     model: object = eqx.field(default_factory=OnlineContact)
     drive: object = None
+
+    @property
+    def system(self):
+        """The vehicle's multibody :class:`~jaxrail.multibody.System`."""
+        return self.vehicle.system
+
+    @property
+    def system_params(self):
+        """Its :class:`~jaxrail.multibody.SystemParams`, ``params.system``."""
+        return self.params.system
 
     def _driven(self, t, qdot, forces):
         return forces if self.drive is None else self.drive.add_to(t, qdot, forces)
@@ -295,4 +307,4 @@ def vehicle_accelerations(vehicle: Vehicle, params: VehicleParams, track, t, q, 
     ``elements``: the force elements' internal states ``{kind: (k, r)}``
     (:class:`~jaxrail.multibody.State`), needed where the vehicle has such elements."""
     loads = VehicleLoads(vehicle, params, track, resolve_contact_model(model), drive)
-    return accelerations(vehicle.system, params.system, t, q, qdot, loads, elements)[0]
+    return accelerations(loads.system, loads.system_params, t, q, qdot, loads, elements)[0]

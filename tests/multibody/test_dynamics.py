@@ -50,7 +50,7 @@ BENCH, BENCH_PARAMS = mb.build_system(
 
 @jax.jit
 def _simulate_bench(params, q0, qdot0, ts, tol):
-    sol = mb.simulate_system(BENCH, params, q0, qdot0, ts[-1], dt0=1e-3,
+    sol = mb.simulate_system(mb.SystemLoads(BENCH, params), q0, qdot0, ts[-1], dt0=1e-3,
                              saveat=diffrax.SaveAt(ts=ts), rtol=tol, atol=tol)
     qs, qds = sol.ys.q, sol.ys.qdot
 
@@ -126,7 +126,7 @@ def test_consistent_initial_conditions(swinging):
 def test_minimum_norm_correction_equals_the_pseudo_inverse():
     """The correction of consistent_initial_conditions against NumPy's SVD pinv, for a
     wide random matrix of full row rank, also under vmap."""
-    from jaxrail.multibody.system import _minimum_norm_solution
+    from jaxrail.multibody.projection import _minimum_norm_solution
 
     rng = np.random.default_rng(3)
     phi_q, rhs = rng.normal(size=(4, 5, 9)), rng.normal(size=(4, 5))

@@ -6,7 +6,6 @@ KenCarp5, a new Jacobian every step or every third accepted one) and Tsit5, with
 step-size control rejecting steps."""
 
 import diffrax
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import pytest
@@ -26,13 +25,15 @@ def _count(name):
     jax.debug.callback(add, ordered=True)
 
 
-class CountingSpring(eqx.Module):
-    """A stiff damped spring along global x (per unit mass k [1/s^2], c [1/s]) that
-    counts its evaluations: as loads (a right-hand side) and linearised (a right-hand
-    side with its Jacobian)."""
+class CountingSpring(mb.AbstractLoads):
+    """A stiff damped spring along global x on BODY (per unit mass k [1/s^2], c [1/s])
+    that counts its evaluations: as loads (a right-hand side) and linearised (a
+    right-hand side with its Jacobian)."""
 
     k: float = 1e4
     c: float = 2000.0
+    system: mb.System = BODY
+    system_params: mb.SystemParams = BODY_PARAMS
 
     def _loads(self, q, qdot):
         force = -MASS * (self.k * q[0] + self.c * qdot[0])
@@ -42,7 +43,7 @@ class CountingSpring(eqx.Module):
         _count("loads")
         return self._loads(q, qdot)
 
-    def linearised(self, t, q, qdot, jacobian=True):
+    def linearised(self, t, q, qdot, track=None, jacobian=True):
         """The loads, and where ``jacobian`` (a bool, maybe traced) holds their Jacobian:
         counted as a Jacobian evaluation there, as a right-hand side elsewhere."""
         def with_jacobian():
@@ -75,10 +76,9 @@ def test_counted_evaluations_equal_the_reported_ones(solver):
         controller = JacobianCounter(controller, solver.jacobian_every)
     # a first step far too long for the tolerance: the controller rejects steps
     sol = jax.jit(lambda q: mb.simulate_system(
-        BODY, BODY_PARAMS, q, jnp.zeros(7), 0.05, dt0=0.02,
+        CountingSpring(), q, jnp.zeros(7), 0.05, dt0=0.02,
         saveat=diffrax.SaveAt(t1=True, controller_state=imex), solver=solver,
-        external=CountingSpring(), stepsize_controller=controller, throw=False,
-        max_steps=10_000))(q0)
+        stepsize_controller=controller, throw=False, max_steps=10_000))(q0)
     jax.effects_barrier()
     steps, rejected = int(sol.stats["num_steps"]), int(sol.stats["num_rejected_steps"])
     assert sol.result == diffrax.RESULTS.successful and rejected >= 1 and steps >= 5
@@ -107,8 +107,8 @@ def test_under_vmap_the_jacobian_stays_at_the_first_stage():
     CALLS.update(loads=0, linearised=0)
     q0 = jnp.array([[1.0, 0, 0, 1.0, 0, 0, 0], [0.5, 0, 0, 1.0, 0, 0, 0]])
     sol = jax.jit(jax.vmap(lambda q: mb.simulate_system(
-        BODY, BODY_PARAMS, q, jnp.zeros(7), 0.05, dt0=0.02, saveat=diffrax.SaveAt(t1=True),
-        solver=IMEX(jacobian_every=3), external=CountingSpring(),
+        CountingSpring(), q, jnp.zeros(7), 0.05, dt0=0.02, saveat=diffrax.SaveAt(t1=True),
+        solver=IMEX(jacobian_every=3),
         stepsize_controller=diffrax.PIDController(rtol=1e-8, atol=1e-10), throw=False,
         max_steps=10_000)))(q0)
     jax.effects_barrier()

@@ -12,7 +12,7 @@ import pytest
 
 import jaxrail
 import jaxrail.multibody as mb
-from jaxrail.multibody.system import _right_hand_sides
+from jaxrail.multibody.equations import _right_hand_sides
 
 SOLVE_RTOL = 1e-9  # lean against dense, relative to the largest component
 RESIDUAL_RTOL = 1e-12  # the rows of eq. (19), relative to their largest term

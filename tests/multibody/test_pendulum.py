@@ -38,8 +38,8 @@ def final_angle(pivot_distance, ts):
                          jnp.zeros((1, 3)).at[0, 2].set(pivot_distance))
     p0 = qt.from_axis_angle(jnp.array([0.0, 1.0, 0.0]), jnp.asarray(THETA0))
     r0 = -qt.rotation_matrix(p0) @ params.joints["revolute"].point_i[0]
-    sol = mb.simulate_system(PENDULUM, params, jnp.concatenate([r0, p0]), jnp.zeros(7),
-                             ts[-1], dt0=1e-3, saveat=diffrax.SaveAt(ts=ts),
+    sol = mb.simulate_system(mb.SystemLoads(PENDULUM, params), jnp.concatenate([r0, p0]),
+                             jnp.zeros(7), ts[-1], dt0=1e-3, saveat=diffrax.SaveAt(ts=ts),
                              rtol=1e-11, atol=1e-11)
     q = sol.ys.q
     theta = 2.0 * jnp.arctan2(q[:, 5], q[:, 3])

@@ -120,9 +120,9 @@ def test_energy_stored_plus_dissipated_is_conserved(element):
     qdot0 = jnp.zeros(7)
     elements0 = mb.initial_element_states(system, params, jnp.array([0, 0, 0, 1.0, 0, 0, 0]))
     ts = jnp.linspace(0.0, 0.5, 4001)
-    sol = mb.simulate_system(system, params, q0, qdot0, 0.5, dt0=1e-4, rtol=1e-11,
-                             atol=1e-13, saveat=diffrax.SaveAt(ts=ts), elements0=elements0,
-                             max_steps=400_000)
+    sol = mb.simulate_system(mb.SystemLoads(system, params), q0, qdot0, 0.5, dt0=1e-4,
+                             rtol=1e-11, atol=1e-13, saveat=diffrax.SaveAt(ts=ts),
+                             elements0=elements0, max_steps=400_000)
     y = sol.ys
     kinetic = jax.vmap(lambda q, v: mb.kinetic_energy(system, params, q, v))(y.q, y.qdot)
     stored = jax.vmap(lambda q, z: mb.potential_energy(system, params, q, z))(y.q, y.elements)
@@ -156,8 +156,9 @@ def test_gradient_through_the_internal_state_matches_central_differences():
         p = type(params)(params.bodies, params.joints, {**params.forces,
                                                          "maxwell_damper": scaled},
                          params.gravity, params.baumgarte_alpha, params.baumgarte_beta)
-        sol = mb.simulate_system(system, p, q0, jnp.zeros(7), 0.05, dt0=1e-4, rtol=1e-12,
-                                 atol=1e-14, elements0=z0, max_steps=100_000)
+        sol = mb.simulate_system(mb.SystemLoads(system, p), q0, jnp.zeros(7), 0.05,
+                                 dt0=1e-4, rtol=1e-12, atol=1e-14, elements0=z0,
+                                 max_steps=100_000)
         return sol.ys.q[-1, 2]
 
     c, k = jnp.float64(2e4), jnp.float64(2e6)

@@ -156,7 +156,7 @@ def test_spring_mass_on_a_table_spring_keeps_its_energy():
 
     @jax.jit
     def run(params):
-        sol = mb.simulate_system(system, params, q0, qdot0, ts[-1], dt0=1e-4,
+        sol = mb.simulate_system(mb.SystemLoads(system, params), q0, qdot0, ts[-1], dt0=1e-4,
                                  saveat=diffrax.SaveAt(ts=ts), rtol=1e-11, atol=1e-11)
         # sol.ys is a State (q, qdot, ...), or the tuple (q, qdot) before it existed.
         q, qdot = (sol.ys.q, sol.ys.qdot) if hasattr(sol.ys, "q") else sol.ys[:2]

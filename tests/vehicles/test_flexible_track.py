@@ -80,11 +80,10 @@ def _two_mass_eigenvalues(half_mass, k_contact, c_contact, rail_mass, k_support,
 def test_vertical_modes_are_those_of_the_two_mass_model(wheelset):
     vehicle, params, track, state = wheelset
     loads = VehicleLoads(vehicle, params, track, OnlineContact())
-    args = (vehicle.system, params.system, loads)
     packed = _pack(state)
 
     def field(y):
-        return _pack(rhs(0.0, _unpack(state, y), args))
+        return _pack(rhs(0.0, _unpack(state, y), loads))
 
     flat, unflatten = jax.flatten_util.ravel_pytree(packed)
     jacobian = jax.jit(jax.jacfwd(lambda x: jax.flatten_util.ravel_pytree(
