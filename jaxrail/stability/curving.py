@@ -123,6 +123,27 @@ def unknowns_of_state(q, qdot, base: SteadyMotion, wheelsets, centre, body):
                            spin, np.zeros(1)])
 
 
+def curving_setup(vehicle, params, track, speed, model):
+    """``(base, frame_rate, centre, u0)``: the rest pose the unknowns are measured from
+    (:class:`~jaxrail.stability.linear.SteadyMotion`), the turning frame
+    (:func:`curve_frame`) and the unknowns' start (every body at its rest pose, the
+    wheelsets rolling at ``speed`` [m/s], no tangential force)."""
+    base = steady_motion(vehicle, params, track, speed, model)
+    frame_rate, centre = curve_frame(track, speed)
+    n = base.q.shape[0] // 7
+    wheelsets = np.asarray(vehicle.wheelsets)
+    axle = jax.vmap(qt.rotation_matrix)(base.q.reshape(n, 7)[:, 3:])[:, :, 1]
+    spin = jnp.einsum("wi,wi->w", base.angular_velocity[wheelsets], axle[wheelsets])
+    u0 = jnp.concatenate([jnp.zeros(6 * n), spin, jnp.zeros(1)])
+    return base, frame_rate, centre, u0
+
+
+def curving_state(u, vehicle, base, frame_rate, centre):
+    """``(q, qdot)`` (global) of the unknowns ``u`` (module docstring)."""
+    q, velocity, omega = _state(u, base, np.asarray(vehicle.wheelsets), frame_rate, centre)
+    return q, velocities_from_twists(q, velocity, omega)
+
+
 def _tangent(point, frame_rate, centre):
     """Unit horizontal direction [-] of travel at ``point`` round the curve's axis."""
     arm = (point - centre).at[2].set(0.0)
@@ -134,8 +155,7 @@ def curving_residual(u, vehicle, params, track, base, frame_rate, centre, body, 
     """The turning frame's accelerations (6 n,) [m/s^2, rad/s^2] of every body and the
     joint constraints [m, rad] at the unknowns ``u`` (module docstring)."""
     n = base.q.shape[0] // 7
-    wheelsets = np.asarray(vehicle.wheelsets)
-    q, velocity, omega = _state(u, base, wheelsets, frame_rate, centre)
+    q, velocity, omega = _state(u, base, np.asarray(vehicle.wheelsets), frame_rate, centre)
     qdot = velocities_from_twists(q, velocity, omega)
     bodies = q.reshape(n, 7)
     force = ConstantForce(body, u[-1] * _tangent(bodies[body, :3], frame_rate, centre))
@@ -160,7 +180,8 @@ class CurvingState:
     tangential_force_n [N] (the force that holds the speed: the curving resistance),
     wheelset_lateral_m (W,) [m] (each wheelset's centre in the track frame, + left),
     wheelset_yaw_rad (W,) [rad] (each axle's yaw to the track's radial line, + left),
-    iterations, residual (largest acceleration left [m/s^2, rad/s^2]).
+    iterations, residual (largest acceleration left [m/s^2, rad/s^2]), unknowns (the
+    solution ``u``, module docstring).
     """
 
     steady: SteadyMotion
@@ -170,6 +191,7 @@ class CurvingState:
     wheelset_yaw_rad: np.ndarray
     iterations: int
     residual: float
+    unknowns: np.ndarray
 
 
 def newton_step(jacobian, residual):
@@ -199,13 +221,7 @@ class SteadyCurving:
         wheelsets = np.asarray(vehicle.wheelsets)
 
         def setup(params, track, speed):
-            base = steady_motion(vehicle, params, track, speed, model)
-            frame_rate, centre = curve_frame(track, speed)
-            n = base.q.shape[0] // 7
-            axle = jax.vmap(qt.rotation_matrix)(base.q.reshape(n, 7)[:, 3:])[:, :, 1]
-            spin = jnp.einsum("wi,wi->w", base.angular_velocity[wheelsets], axle[wheelsets])
-            u0 = jnp.concatenate([jnp.zeros(6 * n), spin, jnp.zeros(1)])
-            return base, frame_rate, centre, u0
+            return curving_setup(vehicle, params, track, speed, model)
 
         def residual(u, params, track, setup_values):
             base, frame_rate, centre, _ = setup_values
@@ -275,7 +291,11 @@ class SteadyCurving:
                              f"{result.status} at {float(result.simulated_time_s):.2f} s")
         return np.asarray(result.q)[-1], np.asarray(result.qdot)[-1]
 
-    def __call__(self, speed, params=None, track=None) -> CurvingState:
+    def __call__(self, speed, params=None, track=None, start=None) -> CurvingState:
+        """The state at ``speed`` [m/s]. ``start``: a :class:`CurvingState` (of other
+        parameters, e.g. the previous step of a design study) whose poses and tangential
+        force start Newton's method, instead of the nearest speed's state of these
+        parameters or the rest pose."""
         params = self.params if params is None else params
         track = self.track if track is None else track
         _check_arc(track)
@@ -288,7 +308,9 @@ class SteadyCurving:
         if self._solved is None or self._solved[0] is not params or self._solved[1] is not track:
             self._solved = (params, track, {})
         solved = self._solved[2]
-        if solved:
+        if start is not None:  # its poses and tangential force, the spins of this speed
+            u = np.concatenate([start.unknowns[:6 * n], u[6 * n:-1], start.unknowns[-1:]])
+        elif solved:
             nearest = min(solved, key=lambda v: abs(v - speed))
             while abs(speed - nearest) > SPEED_STEP:  # continuation: through the speeds between
                 nearest = nearest + np.sign(speed - nearest) * SPEED_STEP
@@ -313,7 +335,7 @@ class SteadyCurving:
         solved[speed] = u
         steady, lateral, yaw = self._report(u, track, setup_values)
         return CurvingState(steady, speed, float(u[-1]), np.asarray(lateral), np.asarray(yaw),
-                            iteration, largest)
+                            iteration, largest, np.asarray(u))
 
 
 def _check_arc(track) -> None:

@@ -12,6 +12,8 @@ centre) with coned wheels (1:40) on UIC60 1:40, in left curves without cant.
   f11 and f22 are taken along the steady creepages' direction (fixed point).
 - A simulation started from the state stays in it (global coordinates, no turning
   frame).
+- The wear numbers' gradient by implicit differentiation of the state
+  (jaxrail.stability.curving_wear) against central differences of states solved anew.
 - Each solve starts from the state solved at the nearest speed, through states 5 m/s
   apart (a stand-in problem, nothing compiled)."""
 
@@ -29,10 +31,11 @@ from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.simulation import SolverOptions, solve
 from jaxrail.stability import LinearStability
 from jaxrail.stability.curving import SteadyCurving
+from jaxrail.stability.curving_wear import CurvingWear
 from jaxrail.stability.wheelset import polach_slopes_along, wheelset_coefficients
 from jaxrail.track import Track, straight_track
 from jaxrail.track.layout import Arc, Straight
-from jaxrail.vehicles import set_values, trailer_values
+from jaxrail.vehicles import get_values, set_values, trailer_values
 from jaxrail.vehicles.suspended_wheelset import LONGITUDINAL_STIFFNESS, suspended_wheelset
 
 WHEEL, RAIL = conical_wheel(0.025, nominal_radius=0.46), uic60("1:40")
@@ -113,6 +116,26 @@ def test_a_simulation_started_in_the_steady_curving_state_stays_in_it(curving):
     assert state.wheelset_lateral_m[0] < -1e-3  # 1.9 mm out: a real curving offset
     assert np.max(np.abs(lateral - state.wheelset_lateral_m[0])) < 1e-6
     assert np.max(np.abs(yaw - state.wheelset_yaw_rad[0])) < 1e-6
+
+
+def test_the_wear_numbers_gradient_against_central_differences(curving):
+    vehicle, params, track, steady = curving
+    names = ("primary_longitudinal_stiffness", "primary_lateral_stiffness")
+    wear = CurvingWear(steady, names)
+    point = wear(SPEED)
+    assert point.wear_number_n.shape == (1, 2)
+    assert np.all(np.isfinite(point.wear_number_n)) and np.max(point.wear_number_n) > 0.0
+    values = np.asarray(get_values(vehicle, params, names))
+    for k, name in enumerate(names):
+        h = 1e-4 * values[k]
+        sides = [wear(SPEED, set_values(vehicle, params, [name], [values[k] + s * h]),
+                      start=point.state).wear_number_n for s in (1.0, -1.0)]
+        central = (sides[0] - sides[1]) / (2.0 * h)
+        assert np.all(np.isfinite(point.gradient[name])) and np.max(np.abs(central)) > 0.0
+        np.testing.assert_allclose(point.gradient[name], central, rtol=0,
+                                   atol=1e-4 * np.max(np.abs(central)), err_msg=name)
+    with pytest.raises(ValueError, match="no_such_parameter"):
+        CurvingWear(steady, ("no_such_parameter",))
 
 
 def test_bad_inputs_are_named(curving):
