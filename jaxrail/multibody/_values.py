@@ -17,6 +17,22 @@ def checked_vector(x, shape, what):
     return a
 
 
+def checked_axis(x, what):
+    """``x`` as a float64 numpy array (3,), finite and non-zero (not normalised), or a
+    ValueError naming ``what``."""
+    a = np.asarray(x, dtype=np.float64)
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or np.linalg.norm(a) == 0.0:
+        raise ValueError(f"{what} must be a finite non-zero 3-vector, got {x!r}")
+    return a
+
+
+def point_arrays(specs):
+    """``{"point_i": (k, 3), "point_j": (k, 3)}`` float64 arrays [m] of the elements'
+    points, as the parameters of every two-point element kind hold them."""
+    return dict(point_i=float64_array([s.point_i for s in specs]),
+                point_j=float64_array([s.point_j for s in specs]))
+
+
 def element_label(what, spec, n):
     """How a message names element ``n`` of a kind: by its name, or by its place."""
     return f"{what} {spec.name!r}" if spec.name else f"{what} #{n}"

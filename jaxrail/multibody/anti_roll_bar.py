@@ -38,7 +38,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from . import quaternion as qt
-from ._values import checked_scalar, element_label, float64_array
+from ._values import checked_scalar, element_label, float64_array, point_arrays
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,8 +110,7 @@ def params(specs, what) -> AntiRollBarParams:
                                 ("half_spacing", True), ("damping", False)):
             checked_scalar(getattr(spec, field), f"{label}: {field}", positive)
     return AntiRollBarParams(
-        point_i=float64_array([s.point_i for s in specs]),
-        point_j=float64_array([s.point_j for s in specs]),
+        **point_arrays(specs),
         torsional_stiffness=float64_array([s.torsional_stiffness for s in specs]),
         arm_length=float64_array([s.arm_length for s in specs]),
         half_spacing=float64_array([s.half_spacing for s in specs]),

@@ -44,7 +44,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import quaternion as qt
-from ._values import checked_scalar, element_label, float64_array
+from ._values import checked_scalar, element_label, float64_array, point_arrays
 from .element_geometry import line_length, separation
 from .pchip import check_table, extend_table, monotone_slopes, value_and_integral
 
@@ -177,8 +177,7 @@ def _maxwell_params(specs, what):
     columns = [extend_table(f, v, monotone_slopes(f, v), size) for f, v in tables]
     f, v, m = (float64_array(np.stack(c)) for c in zip(*columns))
     return MaxwellDamperParams(
-        point_i=float64_array([s.point_i for s in specs]),
-        point_j=float64_array([s.point_j for s in specs]),
+        **point_arrays(specs),
         series_stiffness=float64_array(_positive(specs, what, "series_stiffness")),
         free_length=float64_array([s.free_length for s in specs]),
         forces=f, velocities=v, slopes=m,
@@ -221,8 +220,7 @@ def _air_params(specs, what):
         return float64_array(_positive(specs, what, name))
 
     return AirSpringParams(
-        point_i=float64_array([s.point_i for s in specs]),
-        point_j=float64_array([s.point_j for s in specs]),
+        **point_arrays(specs),
         vertical_stiffness=positive("vertical_stiffness"),
         reservoir_stiffness=positive("reservoir_stiffness"),
         orifice_damping=positive("orifice_damping"),

@@ -43,7 +43,8 @@ from jaxtyping import Array, Float
 from .._tracing import traced_once
 from . import quaternion as qt
 from . import anti_roll_bar, friction_damper, table_spring, traction_rod
-from ._values import checked_vector, float64_array
+from ._values import (checked_axis, checked_vector, element_label, float64_array,
+                      point_arrays)
 from .element_geometry import line_length
 from .elements_series import series_kinds
 from .element_geometry import separation as _separation
@@ -236,14 +237,9 @@ def _bump_potential(s, e):
     return 0.5 * e.stiffness * jnp.sum(jnp.maximum(s - e.clearance, 0.0) ** 2)
 
 
-def _points(specs):
-    return dict(point_i=float64_array([s.point_i for s in specs]),
-                point_j=float64_array([s.point_j for s in specs]))
-
-
 def _spring_params(specs, what):
     return SpringDamperParams(
-        **_points(specs),
+        **point_arrays(specs),
         stiffness=float64_array([s.stiffness for s in specs]),
         damping=float64_array([s.damping for s in specs]),
         free_length=float64_array([s.free_length for s in specs]),
@@ -258,7 +254,7 @@ def _bushing_params(specs, what):
         return float64_array([checked_vector(v, (6,), f"{what} {name}") for v in values])
 
     return BushingParams(
-        **_points(specs),
+        **point_arrays(specs),
         frame_i=float64_array([frame(s.frame_i, "frame_i") for s in specs]),
         frame_j=float64_array([frame(s.frame_j, "frame_j") for s in specs]),
         stiffness=six([s.stiffness for s in specs], "stiffness"),
@@ -268,11 +264,10 @@ def _bushing_params(specs, what):
 
 
 def _bump_params(specs, what):
-    axes = [checked_vector(s.axis_i, (3,), f"{what} axis_i") for s in specs]
-    if any(np.linalg.norm(a) == 0.0 for a in axes):
-        raise ValueError(f"{what} axis_i must be non-zero")
+    axes = [checked_axis(s.axis_i, f"{element_label(what, s, n)} axis_i")
+            for n, s in enumerate(specs)]
     return BumpStopParams(
-        **_points(specs),
+        **point_arrays(specs),
         axis_i=float64_array(axes),
         clearance=float64_array([s.clearance for s in specs]),
         stiffness=float64_array([s.stiffness for s in specs]),

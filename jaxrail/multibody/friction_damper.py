@@ -39,10 +39,9 @@ from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array, Float
 
-from ._values import checked_scalar, checked_vector, element_label, float64_array
+from ._values import checked_axis, checked_scalar, element_label, float64_array, point_arrays
 
 
 @dataclasses.dataclass(frozen=True)
@@ -99,13 +98,9 @@ def params(specs, what) -> FrictionDamperParams:
         label = element_label(what, spec, n)
         checked_scalar(spec.friction_force, f"{label}: friction_force")
         checked_scalar(spec.velocity_scale, f"{label}: velocity_scale", positive=True)
-        axis = checked_vector(spec.axis_i, (3,), f"{label} axis_i")
-        if np.linalg.norm(axis) == 0.0:
-            raise ValueError(f"{label}: axis_i must be non-zero")
-        axes.append(axis)
+        axes.append(checked_axis(spec.axis_i, f"{label}: axis_i"))
     return FrictionDamperParams(
-        point_i=float64_array([s.point_i for s in specs]),
-        point_j=float64_array([s.point_j for s in specs]),
+        **point_arrays(specs),
         axis_i=float64_array(axes),
         friction_force=float64_array([s.friction_force for s in specs]),
         velocity_scale=float64_array([s.velocity_scale for s in specs]),

@@ -34,6 +34,7 @@ from jaxtyping import Array, Float
 
 from .._tracing import traced_once
 from . import quaternion as qt
+from ._values import checked_axis
 from .bodies import D, X_I, X_J, Y_I, Y_J, Z_I, Jet, pair_dots, pair_kinematics
 
 GROUND = -1
@@ -46,9 +47,7 @@ def frame_from_axis(axis, what: str = "axis") -> np.ndarray:
     x is the unit cross product of the coordinate axis least aligned with z and z, a
     deterministic choice, so equal axes on both sides of a joint give equal frames.
     """
-    z = np.asarray(axis, dtype=np.float64)
-    if z.shape != (3,) or not np.all(np.isfinite(z)) or np.linalg.norm(z) == 0.0:
-        raise ValueError(f"{what} must be a finite non-zero 3-vector, got {axis!r}")
+    z = checked_axis(axis, what)
     z = z / np.linalg.norm(z)
     helper = np.eye(3)[int(np.argmin(np.abs(z)))]
     x = np.cross(helper, z)

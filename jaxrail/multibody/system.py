@@ -19,7 +19,7 @@ from jaxrail._float64 import require_float64
 from . import bodies as bd
 from . import forces as fc
 from . import joints as jt
-from ._values import checked_vector, float64_array
+from ._values import checked_vector, float64_array, point_arrays
 
 
 @dataclasses.dataclass(frozen=True)
@@ -100,8 +100,7 @@ def _resolve(element, names, what):
 def _joint_params(specs):
     frames = [s.frames() for s in specs]
     return jt.JointParams(
-        point_i=float64_array([s.point_i for s in specs]),
-        point_j=float64_array([s.point_j for s in specs]),
+        **point_arrays(specs),
         frame_i=float64_array([f[0] for f in frames]),
         frame_j=float64_array([f[1] for f in frames]),
     )

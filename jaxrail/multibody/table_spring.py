@@ -35,7 +35,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import pchip
-from ._values import checked_scalar, checked_vector, element_label, float64_array
+from ._values import checked_axis, checked_scalar, element_label, float64_array, point_arrays
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,16 +125,12 @@ def params(specs, what) -> TableSpringParams:
         label = element_label(what, spec, n)
         checked_scalar(spec.clearance, f"{label}: clearance")
         checked_scalar(spec.damping, f"{label}: damping")
-        axis = checked_vector(spec.axis_i, (3,), f"{label} axis_i")
-        if np.linalg.norm(axis) == 0.0:
-            raise ValueError(f"{label}: axis_i must be non-zero")
-        axes.append(axis)
+        axes.append(checked_axis(spec.axis_i, f"{label}: axis_i"))
         tables.append(_element_table(spec, label))
     m = max(x.size for x, _, _ in tables)
     x, y, d = zip(*(pchip.extend_table(*t, m) for t in tables))
     return TableSpringParams(
-        point_i=float64_array([s.point_i for s in specs]),
-        point_j=float64_array([s.point_j for s in specs]),
+        **point_arrays(specs),
         axis_i=float64_array(axes),
         clearance=float64_array([s.clearance for s in specs]),
         damping=float64_array([s.damping for s in specs]),

@@ -23,7 +23,7 @@ from typing import ClassVar
 import equinox as eqx
 from jaxtyping import Array, Float
 
-from ._values import checked_scalar, element_label, float64_array
+from ._values import checked_scalar, element_label, float64_array, point_arrays
 
 
 @dataclasses.dataclass(frozen=True)
@@ -65,8 +65,7 @@ def params(specs, what) -> TractionRodParams:
         checked_scalar(spec.damping, f"{label}: damping")
         checked_scalar(spec.free_length, f"{label}: free_length", positive=True)
     return TractionRodParams(
-        point_i=float64_array([s.point_i for s in specs]),
-        point_j=float64_array([s.point_j for s in specs]),
+        **point_arrays(specs),
         stiffness=float64_array([s.stiffness for s in specs]),
         damping=float64_array([s.damping for s in specs]),
         free_length=float64_array([s.free_length for s in specs]),
