@@ -128,11 +128,14 @@ def _maxwell_damping(fam, rows):
                      f"(maxwell_damper; scales its characteristic)", get, set_, (1.0, 1e8))
 
 
-def element_parameters(vehicle, params) -> dict[str, Parameter]:
+def element_parameters(vehicle, params, kinds=None) -> dict[str, Parameter]:
     """``{name: Parameter}`` of every family of the vehicle's force elements (module
-    docstring); ``params``: the vehicle's parameters (their fields' shapes)."""
+    docstring), or only of the element kinds in ``kinds``; ``params``: the vehicle's
+    parameters (their fields' shapes)."""
     out = {}
     for group in vehicle.system.force_groups:
+        if kinds is not None and group.kind not in kinds:
+            continue
         families = {}
         for row, name in enumerate(group.names):
             if name:

@@ -7,7 +7,9 @@ c_e, eq. 17 and the damped Hertz laws). Suspension (every element of the family 
 once, per element): ``primary_longitudinal_stiffness``, ``primary_lateral_stiffness``,
 ``primary_vertical_stiffness`` [N/m], ``primary_vertical_damping`` [N s/m] and the
 ``secondary_*`` ones (lateral and vertical damping too) for vehicles with a secondary
-suspension. Geometry: ``track_gauge`` [m] (moves both rails, keeping the profiles) and
+suspension: older names of the bushings' element parameters
+(:mod:`jaxrail.vehicles.element_parameters`), ``primary_lateral_stiffness`` reading and
+writing ``primary.lateral_stiffness`` of the bushings of family ``primary``. Geometry: ``track_gauge`` [m] (moves both rails, keeping the profiles) and
 ``wheelbase`` [m] (the axle spacing of each bogie: moves the axles with their axleboxes
 and the primary suspension's seats on the frame; masses and inertias stay).
 """
@@ -110,18 +112,25 @@ def _wheelbase_set(vehicle, params, value):
                        (seats.at[jnp.asarray(rows), 0].set(ahead), layout))
 
 
-def _bushing(family, field, column, unit, description, range_):
-    def get(vehicle, params):
-        rows = _bushing_rows(vehicle, family)
-        return jnp.mean(getattr(params.system.forces["bushing"], field)[rows, column])
+def _bushing(family, axis, field, unit, range_):
+    """``<family>_<axis>_<field>``: the older name of the bushings' element parameter
+    ``<family>.<axis>_<field>``, which reads and writes the numbers."""
+    target = f"{family}.{axis}_{field}"
 
-    def set_(vehicle, params, value):
-        rows = _bushing_rows(vehicle, family)
-        where = lambda p: getattr(p.system.forces["bushing"], field)  # noqa: E731
-        return eqx.tree_at(where, params, where(params).at[rows, column].set(value))
+    def generated(vehicle, params):
+        from .element_parameters import element_parameters
+        found = element_parameters(vehicle, params, kinds=("bushing",)).get(target)
+        if found is None:
+            raise ValueError(f"vehicle {vehicle.name!r} has no {family} suspension bushings")
+        return found
 
-    return Parameter(f"{family}_{description.replace(' ', '_')}", unit,
-                     f"{family} suspension {description}, per element", get, set_, range_)
+    return Parameter(f"{family}_{axis}_{field}", unit,
+                     f"{family} suspension {axis} {field}, per element (the bushings' "
+                     f"{target})",
+                     lambda vehicle, params: generated(vehicle, params).get(vehicle, params),
+                     lambda vehicle, params, value: generated(vehicle, params).set(
+                         vehicle, params, value),
+                     range_)
 
 
 def _wheelset_mass_get(vehicle, params):
@@ -168,17 +177,17 @@ def check_contact_follows(names, contact: str) -> None:
                          f"(contact 'online')")
 
 
-_AXES = {"longitudinal": 0, "lateral": 1, "vertical": 2}
+_AXES = ("longitudinal", "lateral", "vertical")
 PARAMETERS = {p.name: p for p in [
     _contact("stiffness_scale", "-", "factor on the Hertz contact stiffness (1 = Hertz)",
              (0.01, 100.0)),
     _contact("friction", "-", "wheel-rail friction coefficient", (0.01, 1.5)),
     Parameter("restitution", "-", "c_e of the normal law (effective e = sqrt(c_e))",
               _restitution_get, _restitution_set, (0.01, 1.0)),
-    *[_bushing(family, "stiffness", column, "N/m", f"{axis} stiffness", (0.0, 1e10))
-      for family in ("primary", "secondary") for axis, column in _AXES.items()],
-    *[_bushing(family, "damping", column, "N s/m", f"{axis} damping", (0.0, 1e8))
-      for family in ("primary", "secondary") for axis, column in _AXES.items()],
+    *[_bushing(family, axis, "stiffness", "N/m", (0.0, 1e10))
+      for family in ("primary", "secondary") for axis in _AXES],
+    *[_bushing(family, axis, "damping", "N s/m", (0.0, 1e8))
+      for family in ("primary", "secondary") for axis in _AXES],
     # track gauges from narrow (600 mm) to broad (1676 mm)
     Parameter("track_gauge", "m", "distance between the rails' gauge points, 14 mm below "
               "their tops", _gauge_get, _gauge_set, (0.6, 1.7)),

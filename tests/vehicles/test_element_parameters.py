@@ -24,13 +24,15 @@ def test_family_drops_repetition_and_mirroring(name, expected):
 
 
 def test_the_trailers_bushing_families_are_parameters_like_the_named_ones():
-    """``primary.vertical_stiffness`` reads and writes what ``primary_vertical_stiffness``
-    does (the hand-written names of jaxrail.vehicles.parameters): the same numbers."""
+    """``primary_vertical_stiffness`` (the older names of jaxrail.vehicles.parameters,
+    aliases of the bushings' element parameters) reads and writes what
+    ``primary.vertical_stiffness`` does: the same numbers, both names listed."""
     vehicle, params = trailer()
     known = vehicle_parameters(vehicle, params)
     assert {"primary.vertical_stiffness", "secondary.lateral_damping",
             "primary.pitch_stiffness"} <= set(known)
     assert known["primary.pitch_stiffness"].unit == "N m/rad"
+    assert {"primary_vertical_stiffness", "secondary_lateral_damping"} <= set(known)
     pairs = [("primary.vertical_stiffness", "primary_vertical_stiffness"),
              ("secondary.lateral_damping", "secondary_lateral_damping")]
     for new, old in pairs:
