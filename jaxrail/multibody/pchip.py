@@ -95,12 +95,18 @@ def extend_table(x, y, d, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             np.concatenate([d, np.full(extra.shape, d[-1])]))
 
 
+def interval(x, u):
+    """One-hot (m-1,) in x's dtype of the interval [x_i, x_i+1] of the points x (m,)
+    that holds the scalar u: the last i with x_i <= u, the first or last interval
+    beyond the ends."""
+    i = jnp.sum(u >= x[1:-1])  # interval index in [0, m - 2]
+    return (jnp.arange(x.shape[0] - 1) == i).astype(x.dtype)
+
+
 def value_and_integral(x, y, d, u):
     """(f(u), integral of f from x_0 to u) of the table's interpolant at the scalar u;
     x, y, d (m,) the points, values and slopes (module docstring)."""
-    m = x.shape[0]
-    i = jnp.sum(u >= x[1:-1])  # interval index in [0, m - 2]
-    pick = (jnp.arange(m - 1) == i).astype(x.dtype)
+    pick = interval(x, u)
     x0, x1 = jnp.sum(pick * x[:-1]), jnp.sum(pick * x[1:])
     y0, y1 = jnp.sum(pick * y[:-1]), jnp.sum(pick * y[1:])
     d0, d1 = jnp.sum(pick * d[:-1]), jnp.sum(pick * d[1:])

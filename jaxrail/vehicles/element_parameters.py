@@ -24,9 +24,11 @@ The numbers of each kind (units SI):
 import re
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..multibody import pchip
 from .parameters import Parameter
 
 _SUFFIX = re.compile(r"(_left|_right|_\d+)$")
@@ -102,14 +104,13 @@ def _maxwell_damping(fam, rows):
     index = jnp.asarray(rows)
 
     def slope_at_rest(e):
-        # velocity per force at zero force: the interpolant's slope there (its point 0)
-        m = e.forces.shape[1]
-        i = jnp.clip(jnp.sum(e.forces[index, 1:-1] <= 0.0, axis=1), 0, m - 2)
-        pick = jnp.arange(m)[None, :] == i[:, None]
-        f0 = jnp.sum(jnp.where(pick, e.forces[index], 0.0), axis=1)
-        f1 = jnp.sum(jnp.where(jnp.roll(pick, 1, axis=1), e.forces[index], 0.0), axis=1)
-        v0 = jnp.sum(jnp.where(pick, e.velocities[index], 0.0), axis=1)
-        v1 = jnp.sum(jnp.where(jnp.roll(pick, 1, axis=1), e.velocities[index], 0.0), axis=1)
+        # force per velocity of the table's interval that holds zero force (the one
+        # pchip evaluates there): the interpolant's slope at rest where zero force is a
+        # point between equal secants, as in a linear or a symmetric characteristic
+        f, v = e.forces[index], e.velocities[index]
+        pick = jax.vmap(pchip.interval, (0, None))(f, 0.0)
+        f0, f1 = jnp.sum(pick * f[:, :-1], axis=1), jnp.sum(pick * f[:, 1:], axis=1)
+        v0, v1 = jnp.sum(pick * v[:, :-1], axis=1), jnp.sum(pick * v[:, 1:], axis=1)
         return (f1 - f0) / (v1 - v0)
 
     def get(vehicle, params):
