@@ -39,15 +39,34 @@ np.savez({out!r}, q=np.asarray(result.q), qdot=np.asarray(result.qdot), t=np.asa
 """
 
 
-def run(root, scenario, duration, contact, out):
-    """One run in a process of its own, with ``root``'s jaxrail first on the path."""
+def start(root, scenario, duration, contact, out, core=None):
+    """One run in a process of its own, with ``root``'s jaxrail first on the path (on
+    CPU ``core`` alone where given): the Popen."""
     # compiled cold in both: a program cached on disk by an earlier run would hide one
     # revision's compile time
     env = dict(os.environ, PYTHONPATH=str(root), JAXRAIL_COMPILATION_CACHE="off")
     code = RUN.format(root=str(root), scenario=scenario, duration=duration, contact=contact,
                       out=str(out))
-    subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=tempfile.gettempdir())
+    pin = [] if core is None else ["taskset", "-c", str(core)]
+    return subprocess.Popen(pin + [sys.executable, "-c", code], env=env,
+                            cwd=tempfile.gettempdir())
+
+
+def finish(process, out):
+    if process.wait() != 0:
+        raise RuntimeError(f"run failed ({process.returncode}): {out}")
     return np.load(out)
+
+
+def run_pair(roots, scenario, duration, contact, folder, parallel):
+    """{label: run} of both revisions, one after the other or side by side."""
+    outs = {label: Path(folder) / f"{label}-{scenario}-{contact}.npz" for label in roots}
+    if not parallel:
+        return {label: finish(start(root, scenario, duration, contact, outs[label]),
+                              outs[label]) for label, root in roots.items()}
+    processes = {label: start(root, scenario, duration, contact, outs[label], core)
+                 for core, (label, root) in enumerate(roots.items())}
+    return {label: finish(p, outs[label]) for label, p in processes.items()}
 
 
 def compare(a, b) -> dict:
@@ -64,24 +83,33 @@ def compare(a, b) -> dict:
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--against", required=True, help="git revision to compare with")
+    parser.add_argument("--revision", help="a git revision instead of the working tree")
+    parser.add_argument("--parallel", action="store_true",
+                        help="both revisions at once, one core each")
     parser.add_argument("--duration", type=float, default=3.0)
     parser.add_argument("--scenarios", nargs="+", default=["paper-curve", "paper-curve-irregular"])
     parser.add_argument("--contacts", nargs="+", default=["table", "online"])
     args = parser.parse_args()
     out = {"benchmark": "revision_agreement", "against": args.against,
-           "working_tree": subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, check=True,
-                                          capture_output=True, text=True).stdout.strip(),
+           "working_tree": subprocess.run(["git", "rev-parse", args.revision or "HEAD"],
+                                          cwd=ROOT, check=True, capture_output=True,
+                                          text=True).stdout.strip(),
+           "working_tree_edits": args.revision is None, "parallel": args.parallel,
            "duration_s": args.duration, "load_before": os.getloadavg(), "runs": []}
     with tempfile.TemporaryDirectory() as folder:
-        other = Path(folder) / "other"
-        subprocess.run(["git", "worktree", "add", "--detach", str(other), args.against],
-                       cwd=ROOT, check=True, capture_output=True)
+        roots = {"against": Path(folder) / "other", "working": ROOT}
+        if args.revision is not None:
+            roots["working"] = Path(folder) / "revision"
+        trees = [(roots["against"], args.against)] + (
+            [] if args.revision is None else [(roots["working"], args.revision)])
+        for tree, revision in trees:
+            subprocess.run(["git", "worktree", "add", "--detach", str(tree), revision],
+                           cwd=ROOT, check=True, capture_output=True)
         try:
             for scenario in args.scenarios:
                 for contact in args.contacts:
-                    runs = {label: run(root, scenario, args.duration, contact,
-                                       Path(folder) / f"{label}-{scenario}-{contact}.npz")
-                            for label, root in (("against", other), ("working", ROOT))}
+                    runs = run_pair(roots, scenario, args.duration, contact, folder,
+                                    args.parallel)
                     row = {"scenario": scenario, "contact": contact,
                            **compare(runs["against"], runs["working"])}
                     for label, r in runs.items():
@@ -94,8 +122,9 @@ def main():
                     out["runs"].append(row)
                     print(json.dumps(row), file=sys.stderr)
         finally:
-            subprocess.run(["git", "worktree", "remove", "--force", str(other)], cwd=ROOT,
-                           check=False, capture_output=True)
+            for tree, _ in trees:
+                subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=ROOT,
+                               check=False, capture_output=True)
     out["load_after"] = os.getloadavg()
     print(json.dumps(out, indent=1))
 
