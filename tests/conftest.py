@@ -17,7 +17,7 @@ import pytest  # noqa: E402
 
 import jaxrail._compiler  # noqa: E402
 from jaxrail._lru import LruCache  # noqa: E402
-import jaxrail.simulation  # noqa: E402
+import jaxrail.simulation.run  # noqa: E402
 from jaxrail.vehicles.initial import initial_state  # noqa: E402
 
 # Physics is float64 (docs/design.md §8); tests run with it on, as the CLI does.
@@ -36,7 +36,7 @@ def integrations_at_level_1():
     tests/vehicles/test_imex_trailer.py's 0.4 s runs, Tsit5 and IMEX, 51-57 s instead of
     63 s with empty caches)."""
     level_0_options = jaxrail._compiler.compiler_options
-    compile_function = jaxrail.simulation.compile_function
+    compile_function = jaxrail.simulation.run.compile_function
     integration = [False]
 
     def options():
@@ -55,10 +55,11 @@ def integrations_at_level_1():
 
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(jaxrail._compiler, "compiler_options", options)
-        patch.setattr(jaxrail.simulation, "compile_function", compile_integrations_at_level_1)
+        patch.setattr(jaxrail.simulation.run, "compile_function",
+                      compile_integrations_at_level_1)
         # the module's programs in a cache of their own, dropped after it: the process's
         # cache is keyed without the compiler options, and later modules run level 0
-        patch.setattr(jaxrail.simulation, "_compiled",
+        patch.setattr(jaxrail.simulation.run, "_compiled",
                       LruCache(jaxrail.simulation.PROGRAMS_KEPT))
         yield
 

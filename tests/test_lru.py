@@ -26,7 +26,7 @@ def test_the_process_caches_are_bounded():
     from jaxrail import identification, simulation
     from jaxrail.identification import fit
 
-    for cache in (simulation._compiled, fit._COMPILED, identification._residual_cache):
+    for cache in (simulation.run._compiled, fit._COMPILED, identification._residual_cache):
         assert isinstance(cache, LruCache) and 1 <= cache.size <= 32
     with pytest.raises(ValueError, match="size must be >= 1"):
         LruCache(0)

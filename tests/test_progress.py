@@ -17,7 +17,7 @@ import pytest
 from jaxrail.profiles import rail_offset, uic60
 from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.track import straight_track
-from jaxrail.vehicles import simulate_single_wheelset
+from jaxrail.simulation import simulate_single_wheelset
 
 T1 = 0.5
 

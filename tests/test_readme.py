@@ -30,7 +30,7 @@ def test_top_level_names():
     for name in jaxrail.__all__:
         assert getattr(jaxrail, name) is not None, name
     assert jaxrail.run_scenario.__module__ == "jaxrail.scenarios"
-    assert jaxrail.simulate.__module__ == "jaxrail.simulation" and callable(jaxrail.simulate)
+    assert jaxrail.simulate.__module__ == "jaxrail.simulation.run" and callable(jaxrail.simulate)
     assert jaxrail.identify.__module__ == "jaxrail.identification" and callable(jaxrail.identify)
 
 

@@ -27,7 +27,7 @@ def main():
     from jaxrail.profiles import rail_offset, uic60
     from jaxrail.profiles.analytic import conical_wheel
     from jaxrail.track import straight_track
-    from jaxrail.vehicles import simulate_single_wheelset
+    from jaxrail.simulation import simulate_single_wheelset
 
     wheel, rail = conical_wheel(args.cone), uic60("1:40")
     track = straight_track(args.distance + 30.0)

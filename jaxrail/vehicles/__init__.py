@@ -5,7 +5,6 @@ any vehicle from a vehicle file (docs/vehicle-files.md)."""
 from .bogie import bogie as bogie
 from .initial import initial_state as initial_state
 from .initial import wheelset_rest_pose as wheelset_rest_pose
-from .single_wheelset import simulate_single_wheelset as simulate_single_wheelset
 from .single_wheelset import single_wheelset as single_wheelset
 from .single_wheelset import touching_height as touching_height
 from .trailer import read_vehicle_data as read_vehicle_data
@@ -37,8 +36,8 @@ from .parameters import set_values as set_values
 __all__ = ["bogie", "contact_loads", "contact_model", "CONTACT_MODELS",
            "ContactParameters", "get_values", "initial_state", "OnlineContact",
            "parameter", "PARAMETERS", "patch_loads", "PatchForces",
-           "read_vehicle_data", "set_values", "simulate_single_wheelset",
-           "single_wheelset", "static_loads", "TableContact", "touching_height",
+           "read_vehicle_data", "set_values", "single_wheelset", "static_loads",
+           "TableContact", "touching_height",
            "trailer", "trailer_values", "Vehicle", "vehicle_accelerations",
            "vehicle_from_data", "vehicle_from_file", "vehicle_names",
            "VehicleLoads", "VehicleParams", "wheelset_contact_loads", "wheelset_loads",

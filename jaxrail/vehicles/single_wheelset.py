@@ -1,5 +1,7 @@
 """A single free wheelset on the track: one rigid body of :mod:`jaxrail.multibody`
-under gravity and the wheel-rail loads, simulated by :func:`jaxrail.simulation.simulate`.
+under gravity and the wheel-rail loads, simulated by :func:`jaxrail.simulation.simulate`
+(a free wheelset rolled from its touching height:
+:func:`jaxrail.simulation.simulate_single_wheelset`).
 
 For tests and studies (Klingel's kinematic hunting, contact dynamics). Mass data: the
 Manchester benchmark wheelset, 1813 kg [V-src]; inertias Ixx = Izz = 1120, Iyy = 112
@@ -15,8 +17,7 @@ import jax.numpy as jnp
 
 from ..contact.pose import wheelset_pose
 from ..contact.search import SearchConfig, search_wheelset
-from ..multibody import (RigidBody, build_system, join_coordinates, quaternion,
-                         velocities_from_twists)
+from ..multibody import RigidBody, build_system
 from ..profiles import rail_offset
 from .vehicle import Vehicle, VehicleParams
 from .wheel_rail import ContactParameters
@@ -35,38 +36,6 @@ def touching_height(wheel, rail, track, rail_offset, s, config=SearchConfig()):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if float(jnp.max(search(mid).penetration)) > 0.0 else (lo, mid)
     return hi, search(hi - 1e-7)
-
-
-def simulate_single_wheelset(wheel, rail, track, rail_offset, speed, lateral, t1,
-                             n_outputs=201, contact=None, s0=10.0,
-                             config=SearchConfig(), rtol=1e-6, atol=1e-9, max_steps=400_000,
-                             contact_model=None, integrator="tsit5", progress=False):
-    """Roll a free wheelset along the track from arc length ``s0`` [m] with
-    :func:`jaxrail.simulation.simulate`.
-
-    It starts at the touching height, shifted by ``lateral`` [m] (positive left), moving
-    at ``speed`` [m/s] and spinning at ``speed / rolling radius`` of the centred contact,
-    and runs for ``t1`` [s] with ``n_outputs`` equally spaced outputs, Tsit5 and the PID
-    controller (``rtol``, ``atol``). ``contact``: :class:`ContactParameters` (default
-    ones). ``progress``: show the progress bar. Returns ``(result, (height, patches))``: the
-    :class:`jaxrail.simulation.SimulationResult` and the centred touching height [m] and
-    patches.
-    """
-    from ..simulation import SolverOptions, simulate
-
-    contact = ContactParameters() if contact is None else contact
-    height, patches = touching_height(wheel, rail, track, rail_offset, s0, config)
-    vehicle, params = single_wheelset(wheel, rail, contact, config, rail_offset)
-    position, rotation = wheelset_pose(track, s0, lateral, height)
-    q0 = join_coordinates(position[None, :], quaternion.from_rotation_matrix(rotation)[None, :])
-    radius = patches.rolling_radius[0, 0]
-    qdot0 = velocities_from_twists(q0, speed * rotation[:, 0][None, :],
-                                   (speed / radius) * rotation[:, 1][None, :])
-    options = SolverOptions(rtol=rtol, atol=atol, dt0=1e-4, max_steps=max_steps,
-                            n_outputs=n_outputs, integrator=integrator, progress=progress)
-    result = simulate(vehicle, params, track, t1, speed, initial=(q0, qdot0), options=options,
-                      contact_model=contact_model)
-    return result, (height, patches)
 
 
 def single_wheelset(wheel, rail, contact=None, config=SearchConfig(), offset=None):

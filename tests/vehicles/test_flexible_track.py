@@ -92,10 +92,10 @@ def test_vertical_modes_are_those_of_the_two_mass_model(wheelset):
 
     # the linearised contact at rest (eq. 17 at zero penetration rate: (1 + c_e)/2 of
     # Hertz, docs/normal-forces.md) from the wheel load and the rest penetration
-    from jaxrail.simulation import _wheel_outputs
-    outputs = jax.jit(lambda a, b, r: _wheel_outputs(vehicle, params, track, a, b, r,
-                                                      OnlineContact()))(state.q, state.qdot,
-                                                                        state.track)
+    from jaxrail.simulation.outputs import wheel_outputs
+    outputs = jax.jit(lambda a, b, r: wheel_outputs(vehicle, params, track, a, b, r,
+                                                     OnlineContact()))(state.q, state.qdot,
+                                                                       state.track)
     active = np.asarray(outputs.active)[0, 0]
     delta = float(np.asarray(outputs.penetration)[0, 0][active][0])
     assert np.sum(active) == 1
@@ -162,9 +162,9 @@ def test_peak_load_of_a_dropped_wheelset(wheelset, flexible):
                             damping=(0.0, 0.0))
     load = _wheel_load(params)
     half = load / G
-    from jaxrail.simulation import _wheel_outputs
-    outputs = eqx.filter_jit(_wheel_outputs)(vehicle, params, track, state.q, state.qdot,
-                                             state.track, OnlineContact())
+    from jaxrail.simulation.outputs import wheel_outputs
+    outputs = eqx.filter_jit(wheel_outputs)(vehicle, params, track, state.q, state.qdot,
+                                            state.track, OnlineContact())
     delta = float(np.nanmax(np.asarray(outputs.penetration)[0, 0]))
     c_e = float(params.contact.normal_law.restitution)
     at_rest = 2.0 * load / ((1.0 + c_e) * delta**1.5)  # eq. 17 at rest: (1 + c_e)/2 of K

@@ -10,7 +10,7 @@ import numpy as np
 from jaxrail.profiles import rail_offset, uic60
 from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.track import straight_track
-from jaxrail.vehicles import simulate_single_wheelset
+from jaxrail.simulation import simulate_single_wheelset
 
 
 def test_klingel_wavelength_within_5_percent():
