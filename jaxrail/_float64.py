@@ -4,10 +4,12 @@ Wheel-rail contact needs float64: the track spans kilometres while penetrations 
 hundredths of a millimetre. jaxrail does not switch JAX's global configuration on
 import (that would surprise other libraries in the same process); instead its
 constructors call :func:`require_float64`, and the command line and the studies
-call :func:`enable_float64` once at start-up.
+call :func:`enable_float64` once at start-up. :func:`f64` is the converter of every
+traced float field.
 """
 
 import jax
+import jax.numpy as jnp
 
 
 def enable_float64() -> None:
@@ -22,3 +24,9 @@ def require_float64(what: str) -> None:
             f"{what} needs float64: call jaxrail.enable_float64() (or "
             "jax.config.update('jax_enable_x64', True)) before building it."
         )
+
+
+def f64(x) -> jax.Array:
+    """``x`` as a float64 JAX array (the ``eqx.field`` converter of traced numbers: an
+    explicit dtype, never a weakly typed scalar)."""
+    return jnp.asarray(x, dtype=jnp.float64)

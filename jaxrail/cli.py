@@ -5,6 +5,8 @@ import os
 import sys
 from pathlib import Path
 
+from ._constants import CONTACT_MODELS
+
 
 def _load_profile(name, inclination):
     """A built-in profile by name, or a SIMPACK profile file (.prw/.prr)."""
@@ -460,7 +462,7 @@ def _vehicle_command(args):
         for name, description in vehicle_list():
             print(f"{name:<24}{description}")
         return 0
-    from ._compiler import use_persistent_cache
+    from .compilation import use_persistent_cache
     from .vehicles.from_file import vehicle_file_path
 
     path = vehicle_file_path(args.name)  # a bad name fails here, before compiling
@@ -484,8 +486,6 @@ def _vehicle_command(args):
 # help read the same in every command (argparse lists options in the order they are added).
 
 STANDARD_GAUGE_MM = 1435.0
-# jaxrail.vehicles.loads.CONTACT_MODELS, written out: --help imports no vehicle models
-CONTACT_MODES = ("online", "table")
 SCENARIO_HELP = "a built-in scenario or a .toml file"
 
 
@@ -537,7 +537,7 @@ def _gauge_option(parser, help):
 
 
 def _contact_option(parser):
-    parser.add_argument("--contact", choices=CONTACT_MODES,
+    parser.add_argument("--contact", choices=CONTACT_MODELS,
                         help="contact model: the paper's search at every evaluation (online) "
                         "or its table, built once and cached (default: the scenario's "
                         "[contact] mode)")
@@ -685,7 +685,7 @@ def build_parser():
     stability.add_argument("--plot", help="write the root locus figure (PNG) here; with "
                                           "--nonlinear also the bifurcation diagram beside "
                                           "it (NAME-nonlinear.png)")
-    stability.add_argument("--contact", choices=CONTACT_MODES, default="online",
+    stability.add_argument("--contact", choices=CONTACT_MODELS, default="online",
                            help="contact model (default: the paper's search)")
     stability.add_argument("--curve", metavar="RADIUS[:CANT]",
                            help="the linear analysis in a left curve of this radius [m] and "

@@ -54,6 +54,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from jaxrail._constants import STEEL_POISSON, STEEL_SHEAR_MODULUS
 from jaxrail._float64 import require_float64
 from jaxrail.contact._checks import check_range
 from jaxrail.contact.elliptic import agm_kq
@@ -317,8 +318,8 @@ def _effective_modulus(G, nu):
 def hertz_stiffness(
     A: Float[ArrayLike, "..."],
     B: Float[ArrayLike, "..."],
-    G: Float[ArrayLike, "..."] = 8.2e10,
-    nu: Float[ArrayLike, "..."] = 0.28,
+    G: Float[ArrayLike, "..."] = STEEL_SHEAR_MODULUS,
+    nu: Float[ArrayLike, "..."] = STEEL_POISSON,
     method: str = "table",
 ) -> Float[Array, "..."]:
     """Hertz stiffness K_H [N/m^1.5] (N = K_H delta^1.5), independent of the load.
@@ -336,8 +337,8 @@ def hertz(
     normal_force: Float[ArrayLike, "..."],
     A: Float[ArrayLike, "..."],
     B: Float[ArrayLike, "..."],
-    G: Float[ArrayLike, "..."] = 8.2e10,
-    nu: Float[ArrayLike, "..."] = 0.28,
+    G: Float[ArrayLike, "..."] = STEEL_SHEAR_MODULUS,
+    nu: Float[ArrayLike, "..."] = STEEL_POISSON,
     method: str = "table",
 ) -> HertzContact:
     """Hertz contact ellipse for a normal load.
@@ -391,8 +392,8 @@ def hertz_from_curvatures(
     rolling_radius: Float[ArrayLike, "..."],
     wheel_profile_curvature: Float[ArrayLike, "..."],
     rail_profile_curvature: Float[ArrayLike, "..."],
-    G: Float[ArrayLike, "..."] = 8.2e10,
-    nu: Float[ArrayLike, "..."] = 0.28,
+    G: Float[ArrayLike, "..."] = STEEL_SHEAR_MODULUS,
+    nu: Float[ArrayLike, "..."] = STEEL_POISSON,
     contact_angle: Float[ArrayLike, "..."] = 0.0,
     min_curvature_ratio: float = 1e-3,
     method: str = "table",

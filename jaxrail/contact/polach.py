@@ -42,15 +42,12 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from .._float64 import require_float64
+from .._constants import STEEL_POISSON, STEEL_SHEAR_MODULUS
+from .._float64 import f64, require_float64
 from ._checks import check_range
 from .kalker import kalker_coefficients
 
 _F64 = jnp.float64
-
-
-def _f64(x):
-    return jnp.asarray(x, dtype=_F64)
 
 
 class PolachParameters(eqx.Module):
@@ -68,10 +65,10 @@ class PolachParameters(eqx.Module):
     magnitude [m/s]; ``A_ratio = 1`` or ``B = 0`` keeps ``mu = mu0``.
     """
 
-    k_A: Float[Array, "*batch"] = eqx.field(converter=_f64, default=1.0)
-    k_S: Float[Array, "*batch"] = eqx.field(converter=_f64, default=1.0)
-    A_ratio: Float[Array, "*batch"] = eqx.field(converter=_f64, default=1.0)
-    B: Float[Array, "*batch"] = eqx.field(converter=_f64, default=0.0)
+    k_A: Float[Array, "*batch"] = eqx.field(converter=f64, default=1.0)
+    k_S: Float[Array, "*batch"] = eqx.field(converter=f64, default=1.0)
+    A_ratio: Float[Array, "*batch"] = eqx.field(converter=f64, default=1.0)
+    B: Float[Array, "*batch"] = eqx.field(converter=f64, default=0.0)
 
     @classmethod
     def dry(cls) -> "PolachParameters":
@@ -108,8 +105,8 @@ def polach(
     creepage_x: Float[ArrayLike, "*batch"],
     creepage_y: Float[ArrayLike, "*batch"],
     spin: Float[ArrayLike, "*batch"],
-    G: Float[ArrayLike, "*batch"] = 8.2e10,
-    nu: Float[ArrayLike, "*batch"] = 0.28,
+    G: Float[ArrayLike, "*batch"] = STEEL_SHEAR_MODULUS,
+    nu: Float[ArrayLike, "*batch"] = STEEL_POISSON,
     *,
     parameters: PolachParameters | None = None,
     rolling_speed: Float[ArrayLike, "*batch"] | None = None,
@@ -156,9 +153,9 @@ def polach(
     check_range("polach: shear modulus G [Pa]", G, 0.0, np.inf)
     check_range("polach: Poisson's ratio nu", nu, -1.0, 0.5)
 
-    q, mu0, a, b = _f64(normal_force), _f64(mu), _f64(a), _f64(b)
-    sx, sy, psi = _f64(creepage_x), _f64(creepage_y), _f64(spin)
-    G, nu = _f64(G), _f64(nu)
+    q, mu0, a, b = f64(normal_force), f64(mu), f64(a), f64(b)
+    sx, sy, psi = f64(creepage_x), f64(creepage_y), f64(spin)
+    G, nu = f64(G), f64(nu)
 
     # Kalker coefficients at a/b; a/b = 1 stands in where the ellipse is empty.
     has_area = (a > 0.0) & (b > 0.0)
@@ -166,7 +163,7 @@ def polach(
     if coefficients is None:
         c11, c22, c23 = kalker_coefficients(ratio, nu, method=kalker_method)
     else:
-        c11, c22, c23 = (_f64(c) for c in coefficients)
+        c11, c22, c23 = (f64(c) for c in coefficients)
     ab = a * b
     sqrt_ab = _safe_sqrt(ab)
 
@@ -188,7 +185,7 @@ def polach(
         mu_now = mu0
     else:
         k_a, k_s = parameters.k_A, parameters.k_S
-        w = sc * _f64(rolling_speed)
+        w = sc * f64(rolling_speed)
         a_r = parameters.A_ratio
         mu_now = mu0 * ((1.0 - a_r) * jnp.exp(-parameters.B * w) + a_r)
     qmu = q * mu_now

@@ -17,9 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-
-def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
+from .._float64 import f64
 
 
 # Small-array products written as broadcast-multiply-and-sum: XLA on CPU compiles a
@@ -78,12 +76,12 @@ _A_TENSOR = np.stack(  # (3, 3, 4, 4)
 
 def skew(v: Float[ArrayLike, "3"]) -> Float[Array, "3 3"]:
     """The cross-product matrix v~, with v~ w = v x w."""
-    return -matvec(jnp.asarray(_LEVI), _f64(v))
+    return -matvec(jnp.asarray(_LEVI), f64(v))
 
 
 def vee(m: Float[ArrayLike, "3 3"]) -> Float[Array, "3"]:
     """Inverse of `skew` applied to the skew-symmetric part of m."""
-    return -0.5 * jnp.sum(jnp.asarray(_LEVI) * _f64(m)[:, :, None], axis=(0, 1))
+    return -0.5 * jnp.sum(jnp.asarray(_LEVI) * f64(m)[:, :, None], axis=(0, 1))
 
 
 def rotation_matrix(p: Float[ArrayLike, "4"]) -> Float[Array, "3 3"]:
@@ -91,7 +89,7 @@ def rotation_matrix(p: Float[ArrayLike, "4"]) -> Float[Array, "3 3"]:
 
     Written entry by entry (the same quadratic form as Q(p, p) - I, a tenth of the
     products of contracting `_A_TENSOR`)."""
-    e0, e1, e2, e3 = jnp.moveaxis(_f64(p), -1, 0)
+    e0, e1, e2, e3 = jnp.moveaxis(f64(p), -1, 0)
     d = 2.0 * e0 * e0 - 1.0
     rows = (
         (d + 2.0 * e1 * e1, 2.0 * (e1 * e2 - e0 * e3), 2.0 * (e1 * e3 + e0 * e2)),
@@ -105,7 +103,7 @@ def rotation_matrix_rate(
     p: Float[ArrayLike, "4"], pdot: Float[ArrayLike, "4"]
 ) -> Float[Array, "3 3"]:
     """dA/dt (3, 3) = 2 Q(p, pdot): the exact derivative of A(p) along pdot."""
-    return 2.0 * matvec(matvec(jnp.asarray(_A_TENSOR), _f64(pdot)), _f64(p))
+    return 2.0 * matvec(matvec(jnp.asarray(_A_TENSOR), f64(pdot)), f64(p))
 
 
 def rotation_tensor(p: Float[ArrayLike, "4"]) -> Float[Array, "3 3 4"]:
@@ -114,24 +112,24 @@ def rotation_tensor(p: Float[ArrayLike, "4"]) -> Float[Array, "3 3 4"]:
     Hence dA/dt = 2 M(p) pdot, and the second derivative of A along pdot (with
     pddot = 0) is 2 M(pdot) pdot: everything the joint and force kinematics need.
     """
-    return matvec(jnp.asarray(_A_TENSOR), _f64(p))
+    return matvec(jnp.asarray(_A_TENSOR), f64(p))
 
 
 def g_matrix(p: Float[ArrayLike, "4"]) -> Float[Array, "3 4"]:
     """Nikravesh's G(p) (3, 4): omega' = 2 G pdot (body frame)."""
-    e0, e1, e2, e3 = jnp.moveaxis(_f64(p), -1, 0)
+    e0, e1, e2, e3 = jnp.moveaxis(f64(p), -1, 0)
     rows = ((-e1, e0, e3, -e2), (-e2, -e3, e0, e1), (-e3, e2, -e1, e0))
     return jnp.stack([jnp.stack(r, axis=-1) for r in rows], axis=-2)
 
 
 def e_matrix(p: Float[ArrayLike, "4"]) -> Float[Array, "3 4"]:
     """Nikravesh's E(p) (3, 4): omega = 2 E pdot (global frame)."""
-    return matvec(jnp.asarray(_E_TENSOR), _f64(p))
+    return matvec(jnp.asarray(_E_TENSOR), f64(p))
 
 
 def normalize(p: Float[ArrayLike, "4"]) -> Float[Array, "4"]:
     """p / |p| (p must not be zero)."""
-    p = _f64(p)
+    p = f64(p)
     return p / jnp.linalg.norm(p)
 
 
@@ -143,8 +141,8 @@ def from_axis_angle(
     The right-hand rule: a positive angle turns counter-clockwise seen from the tip of
     `axis`.
     """
-    axis = _f64(axis)
-    half = 0.5 * _f64(angle)
+    axis = f64(axis)
+    half = 0.5 * f64(angle)
     u = axis / jnp.linalg.norm(axis)
     return jnp.concatenate([jnp.cos(half)[None], jnp.sin(half) * u])
 
@@ -155,7 +153,7 @@ def from_rotation_matrix(a: Float[ArrayLike, "3 3"]) -> Float[Array, "4"]:
     All four candidate formulas are evaluated and the best-conditioned one selected,
     so the function is jit-able and its gradient finite for every rotation.
     """
-    a = _f64(a)
+    a = f64(a)
     tr = jnp.trace(a)
     diag = jnp.diagonal(a)
     # 4 * (squared component) for the candidate pivots e0, e1, e2, e3.
@@ -193,7 +191,7 @@ def from_rotation_matrix(a: Float[ArrayLike, "3 3"]) -> Float[Array, "4"]:
 
 def multiply(p: Float[ArrayLike, "4"], r: Float[ArrayLike, "4"]) -> Float[Array, "4"]:
     """Quaternion product p * r, with A(p * r) = A(p) A(r)."""
-    p, r = _f64(p), _f64(r)
+    p, r = f64(p), f64(r)
     p0, pv = p[0], p[1:]
     r0, rv = r[0], r[1:]
     return jnp.concatenate(
@@ -205,11 +203,11 @@ def pdot_from_omega_global(
     p: Float[ArrayLike, "4"], omega: Float[ArrayLike, "3"]
 ) -> Float[Array, "4"]:
     """pdot [1/s] (4,) of a unit p rotating at omega [rad/s] in the global frame."""
-    return 0.5 * matvec(e_matrix(p).T, _f64(omega))
+    return 0.5 * matvec(e_matrix(p).T, f64(omega))
 
 
 def pdot_from_omega_body(
     p: Float[ArrayLike, "4"], omega_body: Float[ArrayLike, "3"]
 ) -> Float[Array, "4"]:
     """pdot [1/s] (4,) of a unit p rotating at omega' [rad/s] in the body frame."""
-    return 0.5 * matvec(g_matrix(p).T, _f64(omega_body))
+    return 0.5 * matvec(g_matrix(p).T, f64(omega_body))

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..multibody import quaternion as qt
 
-from ..vehicles.trailer import GRAVITY as _G
+from .._constants import GRAVITY as _G
 
 GRAVITY = np.array([0.0, 0.0, -_G])  # [m/s^2] global, the vehicles' gravity
 

@@ -24,6 +24,8 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
+from .._float64 import f64
+
 # Defaults, one value per direction (lateral, vertical); sources in docs/track.md.
 # Vertical: DLR's co-moving track (AdvancedNoise SimpleRailwayTrack): 165 kg on
 # 7.5e7 N/m, which lies in the 63-82 MN/m of a UIC60 rail on Zhai et al.'s pads and
@@ -37,19 +39,15 @@ DEFAULT_STIFFNESS = (5.0e7, 7.5e7)  # [N/m]
 DEFAULT_DAMPING = (1.0e5, 6.9e4)  # [N s/m]
 
 
-def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
-
-
 class FlexibleTrack(eqx.Module):
     """The support of each rail under each wheel; arrays (2,): (lateral, vertical).
 
     Fields (traced, differentiable): mass [kg], stiffness [N/m], damping [N s/m].
     """
 
-    mass: Float[Array, "2"] = eqx.field(converter=_f64, default=DEFAULT_MASS)
-    stiffness: Float[Array, "2"] = eqx.field(converter=_f64, default=DEFAULT_STIFFNESS)
-    damping: Float[Array, "2"] = eqx.field(converter=_f64, default=DEFAULT_DAMPING)
+    mass: Float[Array, "2"] = eqx.field(converter=f64, default=DEFAULT_MASS)
+    stiffness: Float[Array, "2"] = eqx.field(converter=f64, default=DEFAULT_STIFFNESS)
+    damping: Float[Array, "2"] = eqx.field(converter=f64, default=DEFAULT_DAMPING)
 
     def accelerations(self, deflection, rate, rail_force):
         """``w''`` [m/s^2] of rails at ``deflection`` [m] and ``rate`` [m/s] under the

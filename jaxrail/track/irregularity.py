@@ -34,12 +34,10 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from .._float64 import f64
+
 CHANNELS = ("alignment", "vertical", "cross_level", "gauge")
 """The channels, in the order of :attr:`Irregularity.values`' columns."""
-
-
-def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
 
 
 class Irregularity(eqx.Module):
@@ -53,10 +51,10 @@ class Irregularity(eqx.Module):
         scale: factor on every channel [-] (1: as sampled).
     """
 
-    values: Float[Array, "n 4"] = eqx.field(converter=_f64)
-    start: Float[Array, ""] = eqx.field(converter=_f64)
-    step: Float[Array, ""] = eqx.field(converter=_f64)
-    scale: Float[Array, ""] = eqx.field(converter=_f64, default=1.0)
+    values: Float[Array, "n 4"] = eqx.field(converter=f64)
+    start: Float[Array, ""] = eqx.field(converter=f64)
+    step: Float[Array, ""] = eqx.field(converter=f64)
+    scale: Float[Array, ""] = eqx.field(converter=f64, default=1.0)
 
     def __check_init__(self):
         shape = np.shape(self.values)

@@ -15,11 +15,12 @@ same vehicle, number for number (tests/vehicles/test_vehicle_file.py).
 
 import numpy as np
 
+from .._constants import GRAVITY
 from ..contact.search import SearchConfig
 from ..multibody import RigidBody, build_system
 from ..profiles import rail_offset as profile_rail_offset
 from ..profiles import s1002, uic60
-from .trailer import GRAVITY, primary_bushings, trailer_values, unsprung_bodies
+from .trailer import primary_bushings, trailer_values, unsprung_bodies
 from .vehicle import Vehicle, VehicleParams
 from .wheel_rail import ContactParameters
 

@@ -23,13 +23,11 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
+from .._float64 import f64
+
 TIME_CONSTANT = 0.05
 """[s] of the drive's speed feedback [A]: a few hunting periods' worth of the creep
 drag is taken up within it, and its eigenvalue stays slow beside the contact's."""
-
-
-def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
 
 
 class SpeedDrive(eqx.Module):
@@ -39,11 +37,11 @@ class SpeedDrive(eqx.Module):
     changing them does not recompile; ``body`` is static."""
 
     body: int = eqx.field(static=True)
-    speed: jnp.ndarray = eqx.field(converter=_f64)
-    mass: jnp.ndarray = eqx.field(converter=_f64)
-    deceleration: jnp.ndarray = eqx.field(converter=_f64, default=0.0)
-    hold: jnp.ndarray = eqx.field(converter=_f64, default=0.0)
-    time_constant: jnp.ndarray = eqx.field(converter=_f64, default=TIME_CONSTANT)
+    speed: jnp.ndarray = eqx.field(converter=f64)
+    mass: jnp.ndarray = eqx.field(converter=f64)
+    deceleration: jnp.ndarray = eqx.field(converter=f64, default=0.0)
+    hold: jnp.ndarray = eqx.field(converter=f64, default=0.0)
+    time_constant: jnp.ndarray = eqx.field(converter=f64, default=TIME_CONSTANT)
 
     def reference_speed(self, t):
         """V_ref(t) [m/s]."""
@@ -67,7 +65,7 @@ class ConstantForce(eqx.Module):
     (:mod:`jaxrail.stability.curving`)."""
 
     body: int = eqx.field(static=True)
-    force: jnp.ndarray = eqx.field(converter=_f64)
+    force: jnp.ndarray = eqx.field(converter=f64)
 
     def add_to(self, t, qdot, forces):
         """``forces`` (n, 3) [N] with the force added on its body."""

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._constants import GRAVITY
 from ..contact.search import SearchConfig
 from ..multibody import RigidBody, build_system
 from ..multibody import forces as fc
@@ -21,7 +22,6 @@ from ..profiles import rail_offset
 from . import element_kinds as ek
 from .load_path import check_supported, static_loads
 from .quantities import check_dimension, file_error, read_number
-from .trailer import GRAVITY
 from .vehicle import Vehicle, VehicleParams
 from .vehicle_file import data_folder, read_vehicle_model
 from .wheel_rail import ContactParameters

@@ -23,6 +23,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._constants import CONTACT_MODELS as CONTACT_MODELS
 from ..contact.search import search_wheelset
 from ..contact.table import ContactTable, table_patches
 from ..contact.table_cache import contact_table
@@ -67,9 +68,6 @@ class TableContact(eqx.Module):
         return jax.vmap(lambda side: table_patches(
             self.table, params.wheel, params.rail, track, params.rail_offset, position,
             rotation, side))(sides)
-
-
-CONTACT_MODELS = ("online", "table")
 
 
 def contact_model(name: str, vehicle: Vehicle, params: VehicleParams, progress: bool = False):

@@ -33,12 +33,13 @@ import dataclasses
 
 import numpy as np
 
+from .._constants import GRAVITY
 from ..contact.search import SearchConfig
 from ..multibody import Prismatic, Revolute, RigidBody, build_system
 from ..profiles import rail_offset as profile_rail_offset
 from ..profiles import s1002, uic60
 from .from_file import read_toml, vehicle_file_path, vehicle_from_data
-from .trailer import GRAVITY, primary_bushings, trailer_values, unsprung_bodies
+from .trailer import primary_bushings, trailer_values, unsprung_bodies
 from .vehicle import Vehicle, VehicleParams
 from .wheel_rail import ContactParameters
 

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._constants import GRAVITY as GRAVITY  # [m/s^2], as trailer.GRAVITY too
 from ..contact.search import SearchConfig
 from ..multibody import Bushing, Revolute, RigidBody, build_system
 from ..profiles import rail_offset as profile_rail_offset
@@ -33,7 +34,6 @@ from ..profiles import s1002, uic60
 from .vehicle import Vehicle, VehicleParams
 from .wheel_rail import ContactParameters
 
-GRAVITY = 9.81  # [m/s^2]
 DEFAULT_DATA = "manchester_trailer.toml"
 TAGS = ("V-src", "R", "A")
 

@@ -22,16 +22,14 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .._tracing import traced_once
+from .._constants import STEEL_POISSON, STEEL_SHEAR_MODULUS
+from .._float64 import f64
+from ..compilation import traced_once
 from ..contact.creepage import creepages
 from ..contact.hertz import hertz_from_curvatures
 from ..contact.normal import Eq17, NormalLaw
 from ..contact.polach import PolachParameters, polach
 from ..contact.search import SearchConfig, search_wheelset
-
-
-def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
 
 
 class ContactParameters(eqx.Module):
@@ -46,10 +44,10 @@ class ContactParameters(eqx.Module):
         polach: Polach 2005 options (defaults reduce to Polach 1999).
     """
 
-    friction: Float[Array, ""] = eqx.field(converter=_f64, default=0.4)
-    stiffness_scale: Float[Array, ""] = eqx.field(converter=_f64, default=1.0)
-    shear_modulus: Float[Array, ""] = eqx.field(converter=_f64, default=8.2e10)
-    poisson: Float[Array, ""] = eqx.field(converter=_f64, default=0.28)
+    friction: Float[Array, ""] = eqx.field(converter=f64, default=0.4)
+    stiffness_scale: Float[Array, ""] = eqx.field(converter=f64, default=1.0)
+    shear_modulus: Float[Array, ""] = eqx.field(converter=f64, default=STEEL_SHEAR_MODULUS)
+    poisson: Float[Array, ""] = eqx.field(converter=f64, default=STEEL_POISSON)
     normal_law: NormalLaw = eqx.field(default_factory=Eq17)
     polach: PolachParameters = eqx.field(default_factory=PolachParameters)
 
