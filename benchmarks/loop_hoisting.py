@@ -69,7 +69,7 @@ def child(variant, duration, runs):
 
     from jaxrail import enable_float64
     enable_float64()
-    import jaxrail._compiler
+    import jaxrail.compilation.compiler
     import jaxrail._time_report
     from jaxrail.scenarios import load_scenario, run_scenario
 
@@ -89,7 +89,7 @@ def child(variant, duration, runs):
         jnp.linalg.inv, jnp.linalg.solve = plain.inv, plain.solve
         jaxrail._time_report.report_time = lambda t: None
     if variant in ("ynn-off", "hoistable", "hoisted"):
-        jaxrail._compiler._CPU_OPTIONS["xla_cpu_experimental_ynn_fusion_type"] = ""
+        jaxrail.compilation.compiler._CPU_OPTIONS["xla_cpu_experimental_ynn_fusion_type"] = ""
     scenario = load_scenario("paper-curve")
     first, *_ = run_scenario(scenario, duration, contact="table")
     walls = []

@@ -56,7 +56,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrail import enable_float64
-from jaxrail._compiler import compiler_options
+from jaxrail.compilation import compiler_options
 from jaxrail._hlo_operations import operation_counts
 
 enable_float64()
@@ -101,7 +101,7 @@ def timed(function, args, calls):
 def compiled_loop(function, args, repeats=LOOP_REPEATS, options=None):
     """``function(q, qdot, data)`` evaluated ``repeats`` times in a compiled loop, as the
     integrator runs it, compiled for ``args`` with jaxrail's compiler options
-    (:mod:`jaxrail._compiler`; none with ``--xla-defaults``) or ``options``; the loop
+    (:mod:`jaxrail.compilation.compiler`; none with ``--xla-defaults``) or ``options``; the loop
     returns the sum of all outputs.
 
     Each evaluation sees the state moved by a tiny multiple of the previous outputs,

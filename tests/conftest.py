@@ -15,9 +15,9 @@ os.environ.setdefault("XLA_FLAGS", "--xla_backend_optimization_level=0 "
 import jax  # noqa: E402
 import pytest  # noqa: E402
 
-import jaxrail._compiler  # noqa: E402
-from jaxrail._lru import LruCache  # noqa: E402
-import jaxrail.simulation.run  # noqa: E402
+import jaxrail.compilation.cache  # noqa: E402
+import jaxrail.compilation.compiler  # noqa: E402
+from jaxrail.compilation import LruCache  # noqa: E402
 from jaxrail.vehicles.initial import initial_state  # noqa: E402
 
 # Physics is float64 (docs/design.md §8); tests run with it on, as the CLI does.
@@ -27,7 +27,7 @@ jax.config.update("jax_enable_x64", True)
 @pytest.fixture(scope="module")
 def integrations_at_level_1():
     """For a module whose runs are long: the integrations jaxrail compiles
-    (jaxrail.simulation._compile's programs but the rest pose) at LLVM level 1 with its
+    (jaxrail.compilation.compile_program's programs but the rest pose) at LLVM level 1 with its
     full pass list, everything else at the suite's level 0. A free wheelset's 0.3 s
     Tsit5 run takes 0.48 s at level 1 against 2.6 s at level 0, for 17.5 s to compile
     instead of 13.9 s (IMEX: 0.5 s against 1.3 s, 21.8 s to compile against 14.7 s), so
@@ -35,8 +35,8 @@ def integrations_at_level_1():
     the README's example, 1 s of the paper's curve, 15 s instead of 35 s;
     tests/vehicles/test_imex_trailer.py's 0.4 s runs, Tsit5 and IMEX, 51-57 s instead of
     63 s with empty caches)."""
-    level_0_options = jaxrail._compiler.compiler_options
-    compile_function = jaxrail.simulation.run.compile_function
+    level_0_options = jaxrail.compilation.compiler.compiler_options
+    compile_function = jaxrail.compilation.cache.compile_function
     integration = [False]
 
     def options():
@@ -54,13 +54,13 @@ def integrations_at_level_1():
             integration[0] = False
 
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(jaxrail._compiler, "compiler_options", options)
-        patch.setattr(jaxrail.simulation.run, "compile_function",
+        patch.setattr(jaxrail.compilation.compiler, "compiler_options", options)
+        patch.setattr(jaxrail.compilation.cache, "compile_function",
                       compile_integrations_at_level_1)
         # the module's programs in a cache of their own, dropped after it: the process's
         # cache is keyed without the compiler options, and later modules run level 0
-        patch.setattr(jaxrail.simulation.run, "_compiled",
-                      LruCache(jaxrail.simulation.PROGRAMS_KEPT))
+        patch.setattr(jaxrail.compilation.cache, "PROCESS_CACHE",
+                      LruCache(jaxrail.compilation.PROGRAMS_KEPT))
         yield
 
 # The slowest test files, slowest first (seconds per file from --durations=0 on a clean

@@ -1,8 +1,9 @@
-"""The compiled-program caches are bounded and drop the least recently used entry."""
+"""The compiled-program cache is bounded, drops the least recently used entry, and is the
+process's only one (jaxrail.compilation)."""
 
 import pytest
 
-from jaxrail._lru import LruCache
+from jaxrail.compilation import LruCache
 
 
 def test_holds_at_most_its_size_and_drops_the_least_recently_used():
@@ -22,11 +23,21 @@ def test_holds_at_most_its_size_and_drops_the_least_recently_used():
     assert made == [1, 2, 3, 2]
 
 
-def test_the_process_caches_are_bounded():
-    from jaxrail import identification, simulation
-    from jaxrail.identification import fit
+def test_the_process_keeps_one_bounded_cache():
+    import sys
 
-    for cache in (simulation.run._compiled, fit._COMPILED, identification._residual_cache):
-        assert isinstance(cache, LruCache) and 1 <= cache.size <= 32
+    from jaxrail import compilation, identification, montecarlo, simulation  # noqa: F401
+    from jaxrail.stability import nonlinear  # noqa: F401
+
+    cache = compilation.cache.PROCESS_CACHE
+    assert isinstance(cache, LruCache) and 1 <= cache.size <= 32
+    # no second cache: simulate, Monte Carlo, stability and identification keep their
+    # programs in the compile layer's
+    others = [name for name, module in list(sys.modules.items())
+              if name.startswith("jaxrail.") and name != "jaxrail.compilation.cache"
+              and any(isinstance(v, LruCache) for v in vars(module).values())]
+    assert others == []
     with pytest.raises(ValueError, match="size must be >= 1"):
         LruCache(0)
+    with pytest.raises(ValueError, match="key must be a tuple starting with a string"):
+        compilation.kept((1, 2), lambda: 0)

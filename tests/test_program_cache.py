@@ -1,4 +1,4 @@
-"""The traced-program cache (jaxrail._program_cache): keys that change with whatever
+"""The traced-program cache (jaxrail.compilation.programs): keys that change with whatever
 the program depends on, a round trip through the disk without tracing."""
 
 import dataclasses
@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from jax import export
 
-from jaxrail import _program_cache
-from jaxrail._program_cache import compile_through_program_cache, program_key
+from jaxrail.compilation import programs
+from jaxrail.compilation.programs import compile_through_program_cache, program_key
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,7 +83,7 @@ def test_round_trip_through_the_folder_without_tracing(tmp_path, monkeypatch):
     def no_tracing(*args, **kwargs):
         raise AssertionError("traced although the program was on disk")
 
-    monkeypatch.setattr(_program_cache.export, "export", no_tracing)
+    monkeypatch.setattr(programs.export, "export", no_tracing)
     loaded = compile_through_program_cache(damped, tmp_path, {}, x, 0.5)
     y = jnp.array([1.0, 0.1, -0.4])
     out = loaded(y, 0.5)
@@ -99,5 +99,5 @@ def test_a_damaged_file_is_traced_again(tmp_path):
     file.write_bytes(b"not a program")
     out = compile_through_program_cache(damped, tmp_path, {}, x, 0.5)(x, 0.5)
     np.testing.assert_allclose(out["x"], damped(x, 0.5)["x"], rtol=1e-15)
-    assert isinstance(export.deserialize(_program_cache.pickle.loads(file.read_bytes())[0]),
+    assert isinstance(export.deserialize(programs.pickle.loads(file.read_bytes())[0]),
                       export.Exported)

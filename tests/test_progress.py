@@ -1,7 +1,7 @@
 """A run with the progress bar is the run without it, bit for bit (one program, its
 loop reporting the simulated time through jaxrail's FFI target), the bar shows the
 simulated seconds as the run goes, and the run's programs go into the persistent
-caches: traced programs (jaxrail._program_cache) and XLA's."""
+caches: traced programs (jaxrail.compilation.programs) and XLA's."""
 
 import json
 import os

@@ -20,7 +20,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._lru import LruCache
+from .. import compilation
 from ..scenarios.checks import MAX_OUTPUTS
 from ..simulation import SolverOptions, solve
 from ..vehicles.parameters import PARAMETERS, get_values, parameter, set_values
@@ -151,12 +151,6 @@ class Identification:
         return out
 
 
-MODELS_KEPT = 8
-"""Models (vehicle, parameters, track, measurements) whose residual functions, and so
-whose compiled fit programs, this process keeps (least recently used first out)."""
-_residual_cache = LruCache(MODELS_KEPT)
-
-
 def _content_key(tree) -> str:
     """SHA-256 of a pytree's content: its structure with every static value, and each
     array leaf's dtype, shape and bytes (a contact model and its table)."""
@@ -176,9 +170,10 @@ def _residual_functions(vehicle, params, track, names, measurements, common):
     """The reverse- and forward-mode residual functions, the same objects for the same
     model, names, sample times, channels and noise levels: the fits of one process
     (e.g. noise-free and noisy data of one study) then share their compiled programs
-    (the measured values are an argument, not part of the function)."""
-    key = (id(vehicle), id(params), id(track), names, measurements.channels,
-           measurements.time.tobytes(), measurements.noise.tobytes(),
+    (the measured values are an argument, not part of the function). They are kept in
+    the process's program cache (:func:`jaxrail.compilation.kept`)."""
+    key = ("identification.residuals", id(vehicle), id(params), id(track), names,
+           measurements.channels, measurements.time.tobytes(), measurements.noise.tobytes(),
            tuple(sorted((k, v) for k, v in common.items() if k != "contact_model")),
            _content_key(common.get("contact_model")))
 
@@ -189,7 +184,7 @@ def _residual_functions(vehicle, params, track, names, measurements, common):
         # the model is kept with the functions so that its ids stay unique while cached
         return made, (vehicle, params, track)
 
-    return _residual_cache.get_or_make(key, functions)[0][0]
+    return compilation.kept(key, functions)[0]
 
 
 def _checked_bounds(bounds, vehicle, params) -> dict:

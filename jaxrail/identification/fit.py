@@ -31,8 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from .._compiler import compiler_options, use_persistent_cache
-from .._lru import LruCache
+from .. import compilation
 
 
 @dataclasses.dataclass(frozen=True)
@@ -109,10 +108,6 @@ def gauss_newton_covariance(jacobian):
     return covariance, covariance / np.outer(std, std)
 
 
-FITS_KEPT = 8
-"""Residual functions whose compiled fit programs this process keeps (least recently
-used first out)."""
-_COMPILED = LruCache(FITS_KEPT)
 ARMIJO = 1e-4  # sufficient decrease of the backtracking line search
 BACKTRACKS = 20  # halvings of the step before the line search gives up
 MAX_STEP = 0.3  # longest step in z: about 30 % in value mid-range
@@ -141,7 +136,8 @@ def _compiled(residuals, method, learning_rate, forward_residuals=None):
     (k products, cheaper for a few parameters; J_z = dr/dz). ``residuals_z(z, bounds,
     data)`` is r, a forward simulation: the line search's trials and the central
     differences of the uncertainty. Fits that pass the same functions share the
-    compiled programs (data and bounds are arguments, not constants)."""
+    compiled programs (data and bounds are arguments, not constants), kept in the
+    process's program cache (:func:`jaxrail.compilation.kept`)."""
     if method == "lbfgs":
         optimizer = optax.lbfgs(linesearch=None)
     elif method == "adam":
@@ -162,15 +158,12 @@ def _compiled(residuals, method, learning_rate, forward_residuals=None):
         return loss_gradient_jacobian(lambda z: forward_residuals(to_values(z), data), z)
 
     def programs():
-        options = compiler_options()
-        use_persistent_cache()
-        return (optimizer, jax.jit(reverse if forward_residuals is None else forward,
-                                   compiler_options=options),
-                jax.jit(residuals_z, compiler_options=options),
+        return (optimizer, compilation.jit(reverse if forward_residuals is None else forward),
+                compilation.jit(residuals_z),
                 jax.jit(lambda grad, state, z: optimizer.update(grad, state, z)))
 
-    key = (residuals, method, learning_rate, forward_residuals)
-    return _COMPILED.get_or_make(key, programs)[0]
+    key = ("identification.fit", residuals, method, learning_rate, forward_residuals)
+    return compilation.kept(key, programs)
 
 
 def jacobian_by_jvp(function, x):

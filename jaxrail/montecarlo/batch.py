@@ -32,8 +32,9 @@ from jax.sharding import NamedSharding, PartitionSpec
 
 from .._devices import POOL_THREADS, devices_may_stall, pool_threads
 from . import coordination
+from ..compilation import compile_program
 from ..vehicles.parameters import set_values
-from ..simulation import DerailmentLimits, SolverOptions, _compile, solve
+from ..simulation import DerailmentLimits, SolverOptions, solve
 
 AXIS = "batch"
 
@@ -150,10 +151,11 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
     ``devices`` (default: all); ``static``: names, duration, options, limits, realise.
     ``on_chunk(start, stop, result)`` receives each chunk's host result without the
     padding. ``done`` (N,) bool: samples already run (a chunk of only those is
-    skipped). The compiled program is
-    cached per structure, options and chunk (:func:`jaxrail.simulation.simulate`'s
-    cache): a second study of the same vehicle does not recompile. Returns (compile
-    time [s], 0 if cached; run time [s]; the chunk used, :func:`chunk_size`)."""
+    skipped). The compiled program is cached per structure, options and chunk
+    (:func:`jaxrail.compilation.compile_program`, as for
+    :func:`jaxrail.simulation.simulate`): a second study of the same vehicle does not
+    recompile. Returns (compile time [s], 0 if cached; run time [s]; the chunk used,
+    :func:`chunk_size`)."""
     devices = tuple(jax.devices() if devices is None else devices)
     if devices_may_stall(devices, jax.process_index()):
         warnings.warn(f"{len(devices)} CPU devices share XLA's thread pool of "
@@ -177,7 +179,7 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
             continue
         rows = np.concatenate([np.arange(start, stop), np.full(chunk - (stop - start), stop - 1)])
         args = model + tuple(_put(np.asarray(x)[rows], devices) for x in inputs)
-        compiled, seconds = _compile(_sharded_jit, *args, devices=devices, **static)
+        compiled, seconds = compile_program(_sharded_jit, *args, devices=devices, **static)
         compile_s += seconds
         t0 = time.perf_counter()
         result = jax.block_until_ready(compiled(*args, devices=devices, **static))

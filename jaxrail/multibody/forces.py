@@ -40,7 +40,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from .._tracing import traced_once
+from ..compilation import traced_once
 from . import quaternion as qt
 from . import anti_roll_bar, friction_damper, table_spring, traction_rod
 from ._values import (checked_axis, checked_vector, element_label, float64_array,

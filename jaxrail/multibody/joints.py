@@ -32,7 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from .._tracing import traced_once
+from ..compilation import traced_once
 from . import quaternion as qt
 from ._values import checked_axis
 from .bodies import D, X_I, X_J, Y_I, Y_J, Z_I, Jet, pair_dots, pair_kinematics

@@ -16,11 +16,15 @@ chose them are in docs/simulation.md.
 
 One job per module: :mod:`.options` (the settings), :mod:`.result` (what a run
 returns), :mod:`.integrate` (:func:`solve`, the traceable core), :mod:`.outputs` (the
-outputs recomputed from the saved states), :mod:`.run` (:func:`simulate`: compile
-once, time, warn at the track's ends) and :mod:`.single_wheelset` (a free wheelset
-rolled along the track).
+outputs recomputed from the saved states), :mod:`.run` (:func:`simulate`: compile once
+through :mod:`jaxrail.compilation`, time, warn at the track's ends) and
+:mod:`.single_wheelset` (a free wheelset rolled along the track).
 """
 
+from ..compilation import PROGRAMS_KEPT as PROGRAMS_KEPT
+# the compile layer's entry point under its former private name, for scripts that
+# still import it from here (jaxrail's own packages use jaxrail.compilation)
+from ..compilation import compile_program as _compile  # noqa: F401
 from .integrate import evaluations_per_step as evaluations_per_step
 from .integrate import solve as solve
 from .options import INTEGRATORS as INTEGRATORS
@@ -28,8 +32,6 @@ from .options import DerailmentLimits as DerailmentLimits
 from .options import SolverOptions as SolverOptions
 from .result import SimulationResult as SimulationResult
 from .result import WheelOutputs as WheelOutputs
-from .run import PROGRAMS_KEPT as PROGRAMS_KEPT
-from .run import _compile as _compile  # noqa: F401  (kept for running scripts)
 from .run import run_span as run_span
 from .run import simulate as simulate
 from .run import warn_beyond_track as warn_beyond_track

@@ -1,6 +1,6 @@
 """The run: :func:`simulate` on the host, around :func:`~jaxrail.simulation.solve`:
 it checks the drive, warns when the run leaves the design track, compiles the rest pose
-and the run once per structure (a process cache of compiled programs), draws the
+and the run once per structure (:func:`jaxrail.compilation.compile_program`), draws the
 progress bar and times the compile and the run."""
 
 import dataclasses
@@ -12,10 +12,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._compiler import compile_function
-from .._lru import LruCache
 from .._progress import SimulatedTimeBar
 from .._time_report import listening
+from ..compilation import CompileTimer
 from ..vehicles.drive import check_drive
 from ..vehicles.initial import initial_state
 from ..vehicles.loads import resolve_contact_model
@@ -23,41 +22,6 @@ from ..vehicles.vehicle import Vehicle, VehicleParams
 from .integrate import as_state, solve
 from .options import DerailmentLimits, SolverOptions
 from .result import SimulationResult
-
-PROGRAMS_KEPT = 32
-"""Compiled programs this process keeps (:func:`_compile`); the least recently used
-one goes first (a paper-curve run uses two: rest pose and run)."""
-_compiled = LruCache(PROGRAMS_KEPT)
-
-
-def _compile(function, *args, **kwargs):
-    """AOT-compile ``function`` (jitted, or a plain function: see
-    :func:`jaxrail._compiler.compile_function`) for these arguments once per static
-    structure and argument shapes; returns (compiled, compile time [s], 0 if it was
-    already compiled in this process)."""
-    leaves, structure = jax.tree.flatten((args, kwargs))
-    key = (function, structure, tuple((x.shape, x.dtype) if eqx.is_array(x) else x
-                                      for x in leaves))
-    start = time.perf_counter()
-    compiled, made = _compiled.get_or_make(
-        key, lambda: compile_function(function, *args, **kwargs))
-    return compiled, (time.perf_counter() - start if made else 0.0)
-
-
-class _Timer:
-    """Compiles through :func:`_compile` and adds up the compile seconds."""
-
-    def __init__(self):
-        self.compile_s = 0.0
-
-    def compile(self, function, *args, **kwargs):
-        compiled, seconds = _compile(function, *args, **kwargs)
-        self.compile_s += seconds
-        return compiled
-
-    def run(self, function, *args, **kwargs):
-        return self.compile(function, *args, **kwargs)(*args, **kwargs)
-
 
 def run_span(params: VehicleParams, speed, t1, s0=None) -> tuple[float, float]:
     """Arc lengths [m] the wheelsets' positions cover in a run of ``t1`` [s] at ``speed``
@@ -99,7 +63,7 @@ def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: f
     The compiled programs (initial equilibrium, integration, outputs) are cached: a
     second call with the same vehicle structure and options does not recompile,
     whatever the numbers; none holds a host callback, so JAX's persistent compilation
-    cache can keep them across processes (:mod:`jaxrail._compiler`). The run is one
+    cache can keep them across processes (:mod:`jaxrail.compilation`). The run is one
     program whether or not ``options.progress`` draws a bar: its loop reports each
     accepted step's time to the host through diffrax's progress-meter hook and an XLA
     FFI target (:mod:`jaxrail._time_report`),
@@ -117,7 +81,7 @@ def simulate(vehicle: Vehicle, params: VehicleParams, track, t1: float, speed: f
     contact_model = resolve_contact_model(contact_model)
     t1, speed, misalignment = (jnp.float64(x) for x in (t1, speed, misalignment))
     s0 = None if s0 is None else jnp.float64(s0)
-    timer = _Timer()
+    timer = CompileTimer()
     if initial is None:
         initial = timer.run(initial_state, vehicle, params, track, speed, misalignment, s0,
                             contact_model)

@@ -44,8 +44,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..compilation import compile_program
 from ..multibody import quaternion as qt
-from ..simulation import SolverOptions, _compile, simulate, solve
+from ..simulation import SolverOptions, simulate, solve
 from ..vehicles.drive import SpeedDrive, check_drive
 from .linear import check_straight
 
@@ -299,7 +300,7 @@ def brute_force(vehicle, params, track, low, high, resolution=0.5, duration=5.0,
         # cycle ``hi`` is known to hunt
         speeds = (np.linspace(lo, hi, runs_per_batch) if first and initial is None
                   else np.linspace(lo, hi, runs_per_batch + 1)[:-1])
-        run, seconds = _compile(_constant_speed_runs, *arrays(speeds), **static)
+        run, seconds = compile_program(_constant_speed_runs, *arrays(speeds), **static)
         compile_s += seconds
         lateral, speed, derailed, ended, q_end, qdot_end = jax.tree.map(
             np.asarray, run(*arrays(speeds), **static))

@@ -33,7 +33,7 @@ import jax
 import jaxrail.montecarlo.batch as batch
 from jaxrail.cli import main
 
-compile_program = batch._compile
+compile_program = batch.compile_program
 
 
 def late_compile(*args, **kwargs):
@@ -44,7 +44,7 @@ def late_compile(*args, **kwargs):
     return out
 
 
-batch._compile = late_compile
+batch.compile_program = late_compile
 sys.exit(main(sys.argv[1:]))
 """
 

@@ -140,7 +140,7 @@ def _thin_basin(monkeypatch, fold, reach, period=0.1):
                 np.ones(b, bool), np.ones((b, n_state)), np.ones((b, n_state)))
 
     monkeypatch.setattr(nonlinear, "limit_cycle", cycle)
-    monkeypatch.setattr(nonlinear, "_compile", lambda f, *a, **k: (run, 0.0))
+    monkeypatch.setattr(nonlinear, "compile_program", lambda f, *a, **k: (run, 0.0))
     return asked
 
 

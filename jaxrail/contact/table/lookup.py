@@ -6,7 +6,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..._tracing import traced_once
+from ...compilation import traced_once
 from ...track.rails import lateral_from_centre, rail_under_wheel, wheel_origin
 from ..patches import wide_point
 from ..search import ContactPatches, contact_geometry

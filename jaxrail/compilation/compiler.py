@@ -23,7 +23,7 @@ when that is set (or wherever ``jax_compilation_cache_dir`` already points), els
 (or JAX's own ``JAX_ENABLE_COMPILATION_CACHE=false``) leaves it off. The cache is
 keyed by the program, the compiler options, the jax version and the machine; JAX
 keeps only programs that took over a second to compile. The traced programs are kept
-too, in ``<cache>/programs`` (:mod:`jaxrail._program_cache`), so that a second process
+too, in ``<cache>/programs`` (:mod:`.programs`), so that a second process
 skips tracing as well; the same switch turns both off. JAX does not keep programs
 that call back to Python, so jaxrail's programs are traced with equinox's runtime
 checks (``eqx.error_if``, e.g. diffrax's checks of its inputs) returning NaN instead
@@ -37,9 +37,9 @@ import os
 import equinox._errors
 import jax
 
-from ._files import cache_root
-from ._program_cache import compile_through_program_cache
-from ._time_report import register as register_time_report
+from .._files import cache_root
+from .._time_report import register as register_time_report
+from .programs import compile_through_program_cache
 
 _CPU_OPTIONS = {
     "xla_cpu_scheduler_type": "CPU_SCHEDULER_TYPE_MEMORY_OPTIMIZED",
@@ -83,7 +83,7 @@ def use_persistent_cache() -> None:
 
 
 def program_folder():
-    """Where traced programs are kept (:mod:`jaxrail._program_cache`): beside jaxrail's
+    """Where traced programs are kept (:mod:`.programs`): beside jaxrail's
     other caches, or None when the persistent cache is off."""
     return None if persistent_cache_folder() is None else cache_root() / "programs"
 
@@ -93,7 +93,7 @@ def compile_function(function, *args, **kwargs):
     host callbacks, through the persistent cache (:func:`use_persistent_cache`).
 
     ``function``: a jitted function (it has ``.lower``): lowered here; or a plain
-    Python function: through the traced-program cache of :mod:`jaxrail._program_cache`
+    Python function: through the traced-program cache of :mod:`.programs`
     (single-device programs). Returns the compiled callable."""
     use_persistent_cache()
     register_time_report()  # a program loaded from a cache may report its time
@@ -102,3 +102,12 @@ def compile_function(function, *args, **kwargs):
             return function.lower(*args, **kwargs).compile(compiler_options())
         return compile_through_program_cache(function, program_folder(), compiler_options(),
                                              *args, **kwargs)
+
+
+def jit(function, **kwargs):
+    """``jax.jit(function)`` with :func:`compiler_options`, the persistent cache on
+    (:func:`use_persistent_cache`): for programs compiled by JAX at their first call
+    (identification's fit programs), with equinox's checks as it traces them."""
+    options = compiler_options()
+    use_persistent_cache()
+    return jax.jit(function, compiler_options=options, **kwargs)

@@ -10,7 +10,7 @@ differentiated forms) at every later call with the same types, and XLA inlines t
 when it compiles, so the compiled program runs the same operations.
 
 The kept jaxpr also keeps how ``eqx.error_if`` was traced: as a host callback that
-raises (equinox's default) or as NaN (inside :mod:`jaxrail._compiler`'s programs, which
+raises (equinox's default) or as NaN (inside :mod:`jaxrail.compilation`'s programs, which
 the persistent caches keep and which therefore hold no callback). So the mode is part
 of the key: a function first called eagerly, then inside a compiled program, is traced
 once for each.

@@ -1,6 +1,6 @@
 """Traced programs kept on disk, so that a second process neither traces nor compiles.
 
-JAX's persistent compilation cache (:mod:`jaxrail._compiler`) saves XLA's compile, but a
+JAX's persistent compilation cache (:mod:`.compiler`) saves XLA's compile, but a
 new process still traces the program in Python first: 3 s for the trailer's initial
 equilibrium and 6 s for its integration, most of a cached start. Here the traced
 program is exported (``jax.export``, StableHLO) and kept in ``<cache>/programs``
@@ -31,8 +31,8 @@ import equinox as eqx
 import jax
 from jax import export
 
-from ._files import write_atomically
-from ._time_report import TARGET as TIME_REPORT_TARGET
+from .._files import write_atomically
+from .._time_report import TARGET as TIME_REPORT_TARGET
 
 _PACKAGES = ("numpy", "jax", "jaxlib", "equinox", "diffrax", "optimistix", "lineax")
 _UNSAFE = (" at 0x", "...")
@@ -42,7 +42,7 @@ _UNSAFE = (" at 0x", "...")
 def _source_digest() -> str:
     """SHA-256 of every module of the jaxrail package (path and content)."""
     digest = hashlib.sha256()
-    root = Path(__file__).parent
+    root = Path(__file__).parents[1]  # jaxrail
     for path in sorted(root.rglob("*.py")):
         digest.update(str(path.relative_to(root)).encode())
         digest.update(path.read_bytes())
@@ -133,7 +133,7 @@ def compile_through_program_cache(function, folder, xla_options, /, *args, **kwa
             return jax.tree.leaves(out)
 
         # jaxrail's own FFI target (the progress report) is registered by every
-        # process that loads the program (jaxrail._compiler)
+        # process that loads the program (.compiler)
         exported = export.export(jax.jit(flat), disabled_checks=[
             export.DisabledSafetyCheck.custom_call(TIME_REPORT_TARGET)])(
             *(jax.ShapeDtypeStruct(x.shape, x.dtype) for x in arrays))
