@@ -10,7 +10,8 @@ refuses the file unless asked to overwrite it.
 On several processes (``jax.distributed``) only process 0 keeps the file;
 :func:`shared_rows` hands its finished rows to every process, so that all skip the same
 chunks (each chunk's gather is a collective that every process must join) and all
-hold the whole table.
+hold the whole table. A study whose table goes to OUT keeps its chunks in
+OUT.chunks.json (:func:`checkpoint_path`) and removes it once the table is written.
 """
 
 import dataclasses
@@ -27,6 +28,19 @@ from . import coordination
 FORMAT = "jaxrail montecarlo checkpoint 2"  # 2: the EN 14363 and EN 12299 columns
 PIECE_CHARACTERS = 1 << 20  # a key-value store's value stays well under gRPC's 4 MB
 SHARE_TIMEOUT_MS = 3600 * 1000
+
+
+def checkpoint_path(table_path) -> Path:
+    """Where a study that writes its table to ``table_path`` keeps its finished chunks
+    while it runs: ``<table_path>.chunks.json`` beside it."""
+    return Path(f"{table_path}.chunks.json")
+
+
+def resumes(path, overwrite: bool = False) -> bool:
+    """Whether a study with the checkpoint ``path`` (None: none) starts from the chunks
+    it holds: it exists and ``overwrite`` is not set (:meth:`Checkpoint.open` refuses
+    it if it holds another study)."""
+    return path is not None and Path(path).exists() and not overwrite
 
 
 def study_key(scenario, samples: dict, duration, contact, chunk) -> str:

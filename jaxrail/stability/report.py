@@ -9,7 +9,7 @@ import numpy as np
 
 from ..geometry import wheelset_geometry
 from ..geometry.report import conicity_entries
-from ..vehicles import get_values
+from ..vehicles import contact_model, get_values
 from ..simulation import SolverOptions
 from ..track import Arc, Track, straight_track
 from .critical import LinearStability
@@ -51,6 +51,39 @@ def curve_track(radius, cant=0.0, rail_centre_distance=1.5) -> Track:
     heading along +x (the stability analysis in a curve)."""
     return Track.from_segments([Arc(300.0, radius, "left", cant)],
                                rail_centre_distance=rail_centre_distance)
+
+
+SPEED_RANGE_FACTORS = (0.25, 3.0)
+"""The root locus's default speed range: these factors on the scenario's speed."""
+
+
+def default_speed_range(scenario) -> tuple[float, float]:
+    """``(low, high)`` [m/s], the root locus's range when none is given: 0.25 to 3 times
+    the scenario's speed (:data:`SPEED_RANGE_FACTORS`)."""
+    low, high = SPEED_RANGE_FACTORS
+    return low * scenario.speed, high * scenario.speed
+
+
+def nonlinear_options(scenario) -> SolverOptions:
+    """The solver of the scenario's nonlinear critical speed (``jaxrail stability
+    --nonlinear``): IMEX with the scenario's tolerances and Jacobian reuse."""
+    return SolverOptions(rtol=scenario.rtol, atol=scenario.atol, integrator="imex",
+                         jacobian_every=scenario.jacobian_every)
+
+
+def study_setup(scenario, curve=None, contact="online", progress=False):
+    """``(vehicle, params, track, model)`` of the stability study of ``scenario``: its
+    vehicle on ideal, rigid track (no irregularity, no flexible support), straight, or
+    with ``curve`` = ``(radius [m], cant [m])`` a left curve (:func:`curve_track`,
+    about the steady curving state); ``model``: the contact table of ``contact`` =
+    "table" (from the cache, or built with a progress bar when ``progress``), None for
+    the search at every evaluation ("online")."""
+    vehicle, params, track = scenario.build(None if curve is None else curve[0])
+    if curve is not None:
+        track = curve_track(*curve, rail_centre_distance=track.rail_centre_distance)
+    model = (contact_model(contact, vehicle, params, progress=progress)
+             if contact == "table" else None)
+    return vehicle, params, track.with_irregularity(None).with_support(None), model
 
 
 def equivalent_conicity(vehicle, params, amplitude=CONICITY_AMPLITUDE_M) -> float:
