@@ -144,7 +144,7 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
             return jax.vmap(lambda r, a: model.wheelset_patches(vehicle, params, track, r,
                                                                 a))(position, rotation)
         return jax.vmap(lambda r, a, w: model.wheelset_patches(
-            vehicle, params, track.under_wheelset(w), r, a))(position, rotation, rails[0])
+            vehicle, params, track, r, a, w))(position, rotation, rails[0])
 
     @parts_of
     def loads(q, qdot, vehicle, params, track, model, rails):

@@ -33,6 +33,7 @@ from .rails import rail_frame as rail_frame
 from .rails import rail_point as rail_point
 from .rails import rail_under_wheel as rail_under_wheel
 from .rails import track_irregularity as track_irregularity
+from .rails import wheel_height as wheel_height
 from .rails import wheel_origin as wheel_origin
 
 __all__ = ["Arc", "FlexibleTrack", "cant_angle", "centreline_position", "CHANNELS", "curvature",
@@ -40,4 +41,4 @@ __all__ = ["Arc", "FlexibleTrack", "cant_angle", "centreline_position", "CHANNEL
            "Irregularity", "project", "rail_displacement", "rail_frame", "rail_point",
            "rail_under_wheel", "Straight", "straight_track", "superelevation",
            "to_track_coordinates", "Track", "track_frame", "track_irregularity",
-           "Transition", "wheel_origin"]
+           "Transition", "wheel_height", "wheel_origin"]

@@ -90,10 +90,9 @@ class Track(eqx.Module):
         irregularity: the track's :class:`~jaxrail.track.irregularity.Irregularity`, or
             None for the ideal track (:meth:`with_irregularity`).
         support: the rails' :class:`~jaxrail.track.flexible.FlexibleTrack` under each
-            wheel, or None for rigid rails (:meth:`with_support`).
-        rail_deflection: (2, 2) [m], the deflection of the rails (left, right;
-            lateral, vertical) under the one wheelset whose contact is being evaluated
-            (:meth:`under_wheelset`, set by the loads), or None.
+            wheel, or None for rigid rails (:meth:`with_support`). The rails'
+            deflection is the run's state, not the track's: it is an argument of
+            :func:`jaxrail.track.rail_under_wheel` and of the contact search.
     """
 
     segment_start: Float[Array, " n"]
@@ -111,7 +110,6 @@ class Track(eqx.Module):
     kinds: tuple[str, ...] = eqx.field(static=True)
     irregularity: Irregularity | None = None
     support: FlexibleTrack | None = None
-    rail_deflection: Float[Array, "2 2"] | None = None
 
     def with_support(self, support: FlexibleTrack | None) -> "Track":
         """This track with flexible rails on ``support`` (None: rigid rails)."""
@@ -119,11 +117,6 @@ class Track(eqx.Module):
             raise TypeError(f"support must be a FlexibleTrack or None, got "
                             f"{type(support).__name__}")
         return dataclasses.replace(self, support=support)
-
-    def under_wheelset(self, deflection) -> "Track":
-        """This track with its rails moved by ``deflection`` (2, 2) [m] (left, right;
-        lateral, vertical): the rails under one wheelset of a flexible track."""
-        return dataclasses.replace(self, rail_deflection=deflection)
 
     def with_irregularity(self, irregularity: Irregularity | None) -> "Track":
         """This layout with ``irregularity`` (None: the ideal track)."""

@@ -9,14 +9,16 @@ A rail's profile origin and frame at arc length ``s`` are made of
 3. the track's irregularity, when it has one (:attr:`Track.irregularity`,
    :mod:`jaxrail.track.irregularity`): the rail moved by ``y = a + side g / 2`` along
    ``n`` and ``z = v + side c / 2`` along ``b``;
-4. on a flexible track, the rail's deflection under the wheelset being evaluated
-   (:attr:`Track.rail_deflection`, :mod:`jaxrail.track.flexible`), along the same
+4. on a flexible track, the rail's deflection under the wheelset being evaluated, an
+   argument ``deflection`` (lateral, vertical) [m] of the functions below (the flexible
+   track's state, :mod:`jaxrail.track.flexible`, not kept on the track), along the same
    ``n`` and ``b``.
 
 The contact search, the contact tables, the loads, the initial equilibrium and the
-outputs all find a wheel's rail through :func:`rail_under_wheel` and
-:func:`rail_frame`. A wheel's origin on its axle is the taping point's plane,
-:data:`HALF_TAPING_DISTANCE` from the wheelset centre (:func:`wheel_origin`).
+outputs (a wheel's height over its rail, :func:`wheel_height`) all find a wheel's rail
+through :func:`rail_under_wheel` and :func:`rail_frame`. A wheel's origin on its axle
+is the taping point's plane, :data:`HALF_TAPING_DISTANCE` from the wheelset centre
+(:func:`wheel_origin`).
 """
 
 import jax.numpy as jnp
@@ -35,24 +37,25 @@ def wheel_origin(wheelset_position, wheelset_rotation, side) -> Float[Array, "3"
     return wheelset_position + side * HALF_TAPING_DISTANCE * wheelset_rotation[:, 1]
 
 
-def rail_displacement(track, s, side) -> tuple[Float[Array, ""], Float[Array, ""]]:
+def rail_displacement(track, s, side, deflection=None
+                      ) -> tuple[Float[Array, ""], Float[Array, ""]]:
     """``(lateral, vertical)`` [m] of the ``side`` rail from its design place at ``s``
     [m], along the canted track frame's ``n`` and ``b``: the irregularity's (zeros on an
-    ideal track) plus, on a flexible track, the rail's deflection under the wheelset
-    being evaluated (:attr:`Track.rail_deflection`, :mod:`jaxrail.track.flexible`)."""
+    ideal track) plus, on a flexible track, ``deflection`` (2,) [m], this rail's
+    (lateral, vertical) deflection under the wheelset being evaluated
+    (:mod:`jaxrail.track.flexible`; None: a rigid rail)."""
     zero = jnp.zeros((), dtype=jnp.float64)
     lateral, vertical = zero, zero
     if getattr(track, "irregularity", None) is not None:
         lateral, vertical = track.irregularity.rail_displacement(s, side)
-    deflection = getattr(track, "rail_deflection", None)
     if deflection is not None:
-        row = jnp.where(jnp.asarray(side) > 0, deflection[0], deflection[1])
-        lateral, vertical = lateral + row[0], vertical + row[1]
+        lateral, vertical = lateral + deflection[0], vertical + deflection[1]
     return lateral, vertical
 
 
 def rail_frame(
-    track, s: Float[ArrayLike, ""], side, lateral_offset: Float[ArrayLike, ""]
+    track, s: Float[ArrayLike, ""], side, lateral_offset: Float[ArrayLike, ""],
+    deflection: Float[ArrayLike, "2"] | None = None,
 ) -> tuple[Float[Array, "3"], Float[Array, "3 3"]]:
     """Rail profile origin and orientation at ``s`` (paper eq. 1).
 
@@ -64,18 +67,20 @@ def rail_frame(
         lateral_offset: distance [m] from the track centre to the rail profile origin,
             measured along the canted ``n`` (e.g. about 0.75303 m for UIC60 1:40 at
             gauge 1435 mm).
+        deflection: on a flexible track, this rail's (lateral, vertical) deflection
+            (2,) [m] under the wheelset being evaluated; None: a rigid rail.
 
     **Returns:** ``(origin, A)``: ``origin = centreline + (side * lateral_offset + y) n
     + z b`` [m], global frame, shape ``(3,)``, with ``(y, z)`` the irregularity's
-    displacement of this rail (:func:`rail_displacement`); ``A = [t n b]`` ``(3, 3)``,
-    the design track frame, the same for both rails (the right rail's field-side
-    mirroring is applied to profile coordinates by :func:`jaxrail.track.rail_point` and
-    by the contact search via ``side``).
+    displacement of this rail plus its deflection (:func:`rail_displacement`);
+    ``A = [t n b]`` ``(3, 3)``, the design track frame, the same for both rails (the
+    right rail's field-side mirroring is applied to profile coordinates by
+    :func:`jaxrail.track.rail_point` and by the contact search via ``side``).
     """
     sign = _side_sign(side)
     frame = track_frame(track, s)
     offset = jnp.asarray(lateral_offset, dtype=jnp.float64)
-    lateral, vertical = rail_displacement(track, s, sign)
+    lateral, vertical = rail_displacement(track, s, sign, deflection)
     origin = (centreline_position(track, s) + (sign * offset + lateral) * frame[:, 1]
               + vertical * frame[:, 2])
     return origin, frame
@@ -89,6 +94,7 @@ def rail_point(
     u: Float[ArrayLike, ""],
     f: Float[ArrayLike, ""],
     dx: Float[ArrayLike, ""] = 0.0,
+    deflection: Float[ArrayLike, "2"] | None = None,
 ) -> Float[Array, "3"]:
     """A point of a rail surface, global frame [m] (paper eq. 2).
 
@@ -102,7 +108,7 @@ def rail_point(
         dx: longitudinal offset [m] along ``t`` (the rail is locally straight).
     """
     sign = _side_sign(side)
-    origin, frame = rail_frame(track, s, sign, lateral_offset)
+    origin, frame = rail_frame(track, s, sign, lateral_offset, deflection)
     local = jnp.stack(
         [
             jnp.asarray(dx, dtype=jnp.float64),
@@ -113,21 +119,35 @@ def rail_point(
     return origin + frame @ local
 
 
-def rail_under_wheel(track, rail_offset, origin, side, s_guess=None):
+def rail_under_wheel(track, rail_offset, origin, side, s_guess=None, deflection=None):
     """The rail section under a wheel whose profile origin is ``origin`` (3,) [m]
     (:func:`wheel_origin`): ``(s_rail, rail_origin (3,), rail_axes (3, 3))``, the
     section's arc length [m] (eqs. 3-5: the design centreline's normal plane through
-    the wheel origin) and the rail's frame there (:func:`rail_frame`)."""
+    the wheel origin) and the rail's frame there (:func:`rail_frame`), the rail moved by
+    its irregularity and, on a flexible track, by ``deflection`` (2,) [m] (lateral,
+    vertical) under this wheel."""
     s_rail = project(track, origin, s_guess)
-    rail_origin, rail_axes = rail_frame(track, s_rail, side, rail_offset)
+    rail_origin, rail_axes = rail_frame(track, s_rail, side, rail_offset, deflection)
     return s_rail, rail_origin, rail_axes
 
 
-def lateral_from_centre(track, rail_offset, s, side, y_rail):
+def lateral_from_centre(track, rail_offset, s, side, y_rail, deflection=None):
     """Lateral position [m] from the design track centre (along the canted ``n``,
     positive left) of the point ``y_rail`` [m] (toward the field side) of the ``side``
-    rail's profile at ``s`` [m], with the rail's irregularity."""
-    return side * (rail_offset + y_rail) + rail_displacement(track, s, side)[0]
+    rail's profile at ``s`` [m], with the rail's irregularity and ``deflection`` (2,)
+    [m] (:func:`rail_displacement`)."""
+    return side * (rail_offset + y_rail) + rail_displacement(track, s, side, deflection)[0]
+
+
+def wheel_height(track, rail_offset, wheelset_position, wheelset_rotation, side,
+                 deflection=None):
+    """Height [m] of the ``side`` wheel's profile origin (:func:`wheel_origin`) over its
+    rail's profile origin, along the rail's ``b`` (:func:`rail_under_wheel`: with the
+    rail's irregularity and ``deflection`` (2,) [m])."""
+    origin = wheel_origin(wheelset_position, wheelset_rotation, side)
+    _, rail_origin, rail_axes = rail_under_wheel(track, rail_offset, origin, side,
+                                                 deflection=deflection)
+    return (origin - rail_origin) @ rail_axes[:, 2]
 
 
 def track_irregularity(track, s) -> Float[Array, "4"]:

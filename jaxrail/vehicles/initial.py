@@ -33,25 +33,29 @@ MAX_ROLL = 0.02  # [rad]
 STEP = 1e-8  # central-difference step in height [m] and roll [rad] of the Newton step
 
 
-def _wheelset_contact(vehicle, params, track, s, lateral, height, roll, speed, model):
+def _wheelset_contact(vehicle, params, track, s, lateral, height, roll, speed, model,
+                      deflection=None):
     """``(patches, patch_forces)`` of a wheelset at ``s`` [m], shifted ``lateral`` [m],
     its centre ``height`` [m] above the track plane, rolled by ``roll`` [rad], moving at
     ``speed`` [m/s] and spinning at speed / nominal radius (the spin creepage of the
-    coned contact gives lateral creep forces with a vertical component)."""
+    coned contact gives lateral creep forces with a vertical component), on rails
+    deflected by ``deflection`` (2, 2) [m] at rest (None: rigid rails)."""
     position, rotation = wheelset_pose(track, s, lateral, height, roll)
     velocity = speed * rotation[:, 0]
     spin = (speed / params.nominal_radius) * rotation[:, 1]
+    rails = None if deflection is None else (deflection, None)
     _, _, patches, forces = wheelset_loads(vehicle, params, track, position, rotation,
-                                           velocity, spin, model)
+                                           velocity, spin, model, rails)
     return patches, forces
 
 
-def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed, model):
+def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed, model,
+                 deflection=None):
     """Upward wheel-rail forces [N] (2,) (left, right wheel; track normal) on the
     wheelset of :func:`_wheelset_contact`, and the mid-overlap rolling radius [m]
     weighted by normal force."""
     patches, forces = _wheelset_contact(vehicle, params, track, s, lateral, height, roll,
-                                        speed, model)
+                                        speed, model, deflection)
     up = track_frame(track, s)[:, 2]
     loads = jnp.sum(forces.force @ up, axis=1)
     weight = jnp.where(patches.active, forces.normal_force, 0.0)
@@ -60,12 +64,14 @@ def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed, model)
 
 
 def wheelset_rest_pose(vehicle: Vehicle, params: VehicleParams, track, s, lateral, load,
-                       speed=0.0, model=None):
+                       speed=0.0, model=None, deflection=None):
     """Centre height [m] above the track plane and roll [rad] at which each wheel of a
     wheelset at arc length ``s`` [m], shifted ``lateral`` [m] and rolling at ``speed``
     [m/s], carries ``load / 2`` [N]; and the rolling radius [m] there (to the middle
     of the overlap, weighted by normal force). ``model``: the contact model
-    (:mod:`jaxrail.vehicles.loads`, default the paper's search).
+    (:mod:`jaxrail.vehicles.loads`, default the paper's search). ``deflection``: on a
+    flexible track, the rails' deflections (2, 2) [m] under the wheelset (left, right;
+    lateral, vertical); None: rigid rails.
 
     Nested bisections: on the roll (within 20 mrad) for equal wheel loads, each with a
     bisection on the height for the total load; then one Newton step on (height, roll)
@@ -76,15 +82,15 @@ def wheelset_rest_pose(vehicle: Vehicle, params: VehicleParams, track, s, latera
     """
     f64 = lambda x: jnp.asarray(x, dtype=jnp.float64)  # noqa: E731
     return _rest_pose(vehicle, (params, track, f64(s), f64(lateral), f64(speed), f64(load),
-                                model))
+                                model, deflection))
 
 
 def _residual(vehicle, inputs, pose):
     """Each wheel's load less half the wheelset's (2,) [N] and the rolling radius [m]
     with the wheelset at ``pose`` (height [m], roll [rad])."""
-    params, track, s, lateral, speed, load, model = inputs
+    params, track, s, lateral, speed, load, model, deflection = inputs
     forces, radius = _wheel_loads(vehicle, params, track, s, lateral, pose[0], pose[1], speed,
-                                  model)
+                                  model, deflection)
     return forces - 0.5 * load, radius
 
 
@@ -96,7 +102,7 @@ PER_ROLL = HEIGHT_BISECTIONS + 1
 @functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
 def _rest_pose(vehicle, inputs):
     """(height, roll, radius) of :func:`wheelset_rest_pose` for ``inputs`` = (params,
-    track, s, lateral, speed, load, model).
+    track, s, lateral, speed, load, model, deflection).
 
     The nested bisections and the Newton step's probes run as one loop with one
     evaluation of the wheel loads per pass, so that the contact model is compiled once
@@ -248,15 +254,14 @@ def _rest_on_flexible_rails(vehicle, params, track, stations, shift, load, speed
     def one(s):
         w = support.static_deflection(pressed)  # (2 rails, 2 directions)
         for _ in range(REST_PASSES - 1):
-            under = track.under_wheelset(w)
-            height, roll, _ = wheelset_rest_pose(vehicle, params, under, s, shift(s), load,
-                                                 speed, model)
-            patches, forces = _wheelset_contact(vehicle, params, under, s, shift(s), height,
-                                                roll, speed, model)
+            height, roll, _ = wheelset_rest_pose(vehicle, params, track, s, shift(s), load,
+                                                 speed, model, w)
+            patches, forces = _wheelset_contact(vehicle, params, track, s, shift(s), height,
+                                                roll, speed, model, w)
             w = w.at[:, 0].set(support.static_deflection(rail_loads(track, patches,
                                                                     forces))[:, 0])
-        height, roll, radius = wheelset_rest_pose(vehicle, params, track.under_wheelset(w), s,
-                                                  shift(s), load, speed, model)
+        height, roll, radius = wheelset_rest_pose(vehicle, params, track, s, shift(s), load,
+                                                  speed, model, w)
         return height, roll, radius, w
 
     heights, rolls, radii, w = jax.vmap(one)(stations)

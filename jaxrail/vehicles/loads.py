@@ -43,11 +43,12 @@ class OnlineContact(eqx.Module):
     name = "online"
 
     def wheelset_patches(self, vehicle: Vehicle, params: VehicleParams, track, position,
-                         rotation):
+                         rotation, deflection=None):
         """Contact patches ``(2, P)`` of the wheelset at ``position`` (3,) [m] with
-        body axes ``rotation`` (3, 3), global."""
+        body axes ``rotation`` (3, 3), global; ``deflection``: on a flexible track, the
+        rails' deflections (2, 2) [m] under it (left, right; lateral, vertical)."""
         return search_wheelset(params.wheel, params.rail, track, params.rail_offset,
-                               position, rotation, vehicle.config)
+                               position, rotation, vehicle.config, deflection=deflection)
 
 
 class TableContact(eqx.Module):
@@ -61,13 +62,15 @@ class TableContact(eqx.Module):
     name = "table"
 
     def wheelset_patches(self, vehicle: Vehicle, params: VehicleParams, track, position,
-                         rotation):
+                         rotation, deflection=None):
         """Contact patches ``(2, P)`` of the wheelset at ``position`` (3,) [m] with body
-        axes ``rotation`` (3, 3), global, from the table."""
+        axes ``rotation`` (3, 3), global, from the table; ``deflection``: as
+        :meth:`OnlineContact.wheelset_patches`."""
         sides = jnp.array([1.0, -1.0])
-        return jax.vmap(lambda side: table_patches(
+        return jax.vmap(lambda side, d: table_patches(
             self.table, params.wheel, params.rail, track, params.rail_offset, position,
-            rotation, side))(sides)
+            rotation, side, d), in_axes=(0, None if deflection is None else 0))(
+                sides, deflection)
 
 
 def contact_model(name: str, vehicle: Vehicle, params: VehicleParams, progress: bool = False):
@@ -110,13 +113,13 @@ def wheelset_loads(vehicle: Vehicle, params: VehicleParams, track, position, rot
     global, with its patches and patch forces: ``(force, moment, patches, forces)``.
     ``model``: the contact model (default :class:`OnlineContact`). ``rails``: on a
     flexible track, the deflection and rate ``(w, wdot)`` (2, 2) [m, m/s] of the rails
-    under this wheelset (:mod:`jaxrail.track.flexible`); None: rigid rails."""
+    under this wheelset (:mod:`jaxrail.track.flexible`; ``wdot`` None: rails at rest,
+    no rail velocity in the creepages); None: rigid rails."""
     rail_velocity = None
-    if rails is not None:
-        track = track.under_wheelset(rails[0])
+    deflection = None if rails is None else rails[0]
     patches = resolve_contact_model(model).wheelset_patches(vehicle, params, track, position,
-                                                             rotation)
-    if rails is not None:
+                                                             rotation, deflection)
+    if rails is not None and rails[1] is not None:
         rail_velocity = jnp.einsum("sd,sdi->si", rails[1], rail_axes(track, patches))
     force, moment, forces = patch_loads(params.contact, patches, position, velocity,
                                         angular_velocity, rail_velocity)

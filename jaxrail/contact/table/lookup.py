@@ -15,8 +15,10 @@ from .grid import _RATES, _VALUES, FIELDS, GEOMETRY, ContactTable
 from .spline import _pose_weights
 
 
-def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotation, side):
-    """Pose of one wheel relative to its rail (module docstring).
+def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotation, side,
+                  deflection=None):
+    """Pose of one wheel relative to its rail (module docstring), the rail moved by
+    ``deflection`` (2,) [m] on a flexible track (:func:`jaxrail.track.rail_under_wheel`).
 
     Returns ``(lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, wheel_origin,
     frame)``: the four pose coordinates [m, m, rad, rad], the rail section's arc length
@@ -24,7 +26,8 @@ def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotati
     :class:`~jaxrail.contact.strip.WheelFrame`."""
     axle = wheelset_rotation[:, 1]
     origin = wheel_origin(wheelset_position, wheelset_rotation, side)
-    s_rail, rail_origin, rail_axes = rail_under_wheel(track, rail_offset, origin, side)
+    s_rail, rail_origin, rail_axes = rail_under_wheel(track, rail_offset, origin, side,
+                                                      deflection=deflection)
     frame = wheel_frame(axle, rail_axes[:, 0])
     taping = origin - radius * frame.up - rail_origin
     local = rail_axes.T @ axle
@@ -70,15 +73,16 @@ def _along_levels(heights, fields, vertical, levels):
 
 @traced_once
 def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset_position,
-                  wheelset_rotation, side) -> ContactPatches:
+                  wheelset_rotation, side, deflection=None) -> ContactPatches:
     """Contact patches of one wheel from ``table`` instead of the search: the same
     :class:`ContactPatches` as :func:`jaxrail.contact.search_wheel` (leading shape
     ``(P,)``), each patch's penetration interpolated between the approach levels in the
-    wheel's vertical position (:func:`_along_levels`)."""
+    wheel's vertical position (:func:`_along_levels`). ``deflection``: as
+    :func:`~jaxrail.contact.search_wheel`'s."""
     side = jnp.asarray(side, dtype=jnp.float64)
     (lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, origin,
      frame) = relative_pose(track, rail_offset, table.radius, wheelset_position,
-                            wheelset_rotation, side)
+                            wheelset_rotation, side, deflection)
     side_index = jnp.where(side > 0.0, 0, 1).astype(jnp.int32)
     slots, count = len(table.surfaces), table.shape[4]
     nodes, weight = _pose_weights(table, side_index, lateral, yaw, roll)
@@ -121,7 +125,7 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
         y_wheel=y_wheel,
         y_rail=y_rail,
         s_rail=jnp.full(y_wheel.shape, s_rail),
-        y_track=lateral_from_centre(track, rail_offset, s_rail, side, y_rail),
+        y_track=lateral_from_centre(track, rail_offset, s_rail, side, y_rail, deflection),
         curvature_contact_y=curvature,
         **geometry,
     )
