@@ -41,12 +41,12 @@ def evaluations_per_step(solver) -> tuple[int, int]:
     return -1, -1
 
 
-def _stop_events(vehicle, track, limits, rest_height):
+def _stop_events(vehicle, params, track, limits, rest_height):
     """The terminating diffrax Event of a run: (derailed, non-finite state)."""
     def derailed(t, y, args, **kwargs):
-        q, qdot = y.q, y.qdot
-        lateral, _, _, heights, irregularity = wheelset_track_coordinates(vehicle, track, q,
-                                                                           qdot)
+        deflection = None if y.track is None else y.track[0]
+        lateral, _, _, heights, irregularity = wheelset_track_coordinates(
+            vehicle, params, track, y.q, y.qdot, deflection)
         lifted = jnp.any(heights - rest_height > limits.lift)
         off = jnp.any(jnp.abs(lateral - irregularity[:, 0]) > limits.lateral)
         return lifted | off
@@ -88,7 +88,7 @@ def _integrate(loads, start, rest_heights, t1, ts, options, limits, solver, adjo
         atol=options.atol, solver=solver,
         max_steps=options.max_steps, adjoint=adjoint, throw=False,
         stepsize_controller=controller,
-        event=_stop_events(loads.vehicle, loads.track, limits, rest_heights),
+        event=_stop_events(loads.vehicle, loads.params, loads.track, limits, rest_heights),
         track0=start.track, elements0=start.elements,
         progress_meter=TimeReportingMeter(t1) if report else None)
 
@@ -153,7 +153,8 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
     loads = VehicleLoads(vehicle, params, track, resolve_contact_model(contact_model), drive)
     start = _start(vehicle, params, track, speed, misalignment, s0, initial, loads.model)
     lateral0, _, _, rest_heights, irregularity0 = wheelset_track_coordinates(
-        vehicle, track, start.q, start.qdot)
+        vehicle, params, track, start.q, start.qdot, None if start.track is None
+        else start.track[0])
     ts = jnp.linspace(0.0, t1, options.n_outputs)
     solver = options.solver() if solver is None else solver
     sol = _integrate(loads, start, rest_heights, t1, ts, options, limits, solver, adjoint,

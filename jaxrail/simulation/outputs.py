@@ -7,31 +7,33 @@ import jax.numpy as jnp
 
 from ..multibody import FixedLoads, accelerations, constraints
 from ..track import to_track_coordinates, track_frame
-from ..track.irregularity import rail_offsets
-from ..track.rails import HALF_TAPING_DISTANCE, track_irregularity
+from ..track.rails import track_irregularity, wheel_height
 from ..vehicles.loads import contact_loads
 from ..vehicles.vehicle import wheelset_states
 from .result import SimulationResult, WheelOutputs
 
 
-def wheelset_track_coordinates(vehicle, track, q, qdot):
+def wheelset_track_coordinates(vehicle, params, track, q, qdot, deflection=None):
     """Per wheelset: lateral [m], vertical [m] offsets and yaw [rad] relative to the
-    design track, the height [m] of each wheel's taping point (W, 2) over its rail's
-    place (the design track plane moved by the rail's vertical irregularity), and the
-    irregularity channels at the wheelset (W, 4) [m] (:mod:`jaxrail.track.rails`)."""
+    design track, the height [m] of each wheel's profile origin (W, 2) over its rail's
+    (:func:`jaxrail.track.rails.wheel_height`: the rail where the contact finds it, with
+    its irregularity and, on a flexible track, its ``deflection`` (W, 2, 2) [m]), and
+    the irregularity channels at the wheelset (W, 4) [m]."""
     position, rotation, _, _ = wheelset_states(vehicle, q, qdot)
     sides = jnp.array([1.0, -1.0])
 
-    def one(r, a):
+    def one(r, a, w):
         s, lateral, vertical = to_track_coordinates(track, r)
         frame = track_frame(track, s)
         axle = frame.T @ a[:, 1]
         yaw = -jnp.arctan2(axle[0], axle[1])
         irregularity = track_irregularity(track, s)
-        rail_heights = rail_offsets(irregularity, sides)[1]
-        wheel_heights = vertical + sides * HALF_TAPING_DISTANCE * axle[2] - rail_heights
+        wheel_heights = jax.vmap(
+            lambda side, d: wheel_height(track, params.rail_offset, r, a, side, d),
+            in_axes=(0, None if w is None else 0))(sides, w)
         return lateral, vertical, yaw, wheel_heights, irregularity
-    return jax.vmap(one)(position, rotation)
+    return jax.vmap(one, in_axes=(0, 0, None if deflection is None else 0))(
+        position, rotation, deflection)
 
 
 def state_outputs(vehicle, params, track, q, qdot, rails, model, t=0.0, drive=None,
@@ -72,7 +74,7 @@ def simulation_result(vehicle, params, track, model, start, ts, saved, result, d
     without host timings. ``drive``: the run's speed drive, or None."""
     q0, qdot0, rails0 = start.q, start.qdot, start.track
     q, qdot, rails = saved.q, saved.qdot, saved.track
-    _, rest_vertical, _, _, _ = wheelset_track_coordinates(vehicle, track, q0, qdot0)
+    _, rest_vertical, _, _, _ = wheelset_track_coordinates(vehicle, params, track, q0, qdot0)
     valid = jnp.all(jnp.isfinite(q), axis=1) & jnp.all(jnp.isfinite(qdot), axis=1)
     # Outputs after an early stop are recomputed at the initial state and masked.
     safe = lambda x, x0: jnp.where(valid.reshape((-1,) + (1,) * (x.ndim - 1)), x, x0)  # noqa: E731
@@ -80,7 +82,7 @@ def simulation_result(vehicle, params, track, model, start, ts, saved, result, d
     rails_safe = None if rails is None else jax.tree.map(safe, rails, rails0)
     elements_safe = jax.tree.map(safe, saved.elements, start.elements)
     lateral, vertical, yaw, _, irregularity = jax.vmap(
-        lambda a, b: wheelset_track_coordinates(vehicle, track, a, b))(q_safe, qdot_safe)
+        lambda a, b: wheelset_track_coordinates(vehicle, params, track, a, b))(q_safe, qdot_safe)
     wheels, qddot = jax.lax.map(
         lambda y: state_outputs(vehicle, params, track, *y[1:4], model, y[0], drive, y[4]),
         (ts, q_safe, qdot_safe, rails_safe, elements_safe))
