@@ -6,13 +6,9 @@ import dataclasses
 import diffrax
 import equinox as eqx
 import jax
-import jax.numpy as jnp
 
+from .._float64 import f64
 from ..multibody.imex import IMEX, check_jacobian_every
-
-
-def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
 
 
 class DerailmentLimits(eqx.Module):
@@ -21,8 +17,8 @@ class DerailmentLimits(eqx.Module):
     (the S1002 flange is 28 mm high: at 25 mm lift the flange is on the rail head).
     Traced: changing them does not recompile."""
 
-    lateral: jax.Array = eqx.field(converter=_f64, default=0.035)
-    lift: jax.Array = eqx.field(converter=_f64, default=0.025)
+    lateral: jax.Array = eqx.field(converter=f64, default=0.035)
+    lift: jax.Array = eqx.field(converter=f64, default=0.025)
 
 
 INTEGRATORS = ("tsit5", "imex")
