@@ -1,17 +1,15 @@
-"""Force elements and generalized forces in the Euler-parameter (pdot) convention.
+"""Force elements: their kinds (:data:`FORCE_KINDS`) and their generalized forces.
 
-A force f (global, [N]) at the body point s' [m] (body frame) and a torque n (global,
-[N m]) on body i do the virtual work f . delta r_P + n . delta pi, which in the
-coordinates q_i = (r, p) is the generalized force
-
-    g_r = f,     g_p = 2 G^T n',     n' = s' x (A^T f) + A^T n   (body frame).
+The generalized force of a force or torque on a body (the Euler-parameter (pdot)
+convention) is :mod:`.generalized_forces`; its names ``point_force``, ``body_torque``,
+``centre_loads`` and ``gravity_forces`` are importable from here as well.
 
 Suspension elements (spring-dampers, bushings, bump stops) between body i and body j
 (-1 for the ground) are written as a few deformation coordinates s(q_i, q_j) and a
 law F(s, sdot) giving the generalised force -(ds/dq)^T F. The stiffness part is then
 exactly minus the gradient of the element's potential, so conservative systems keep
-their energy. The component of g_p along p does no work on the unit sphere (it only
-changes the normalisation multiplier) and is removed, so every g_p here is tangent.
+their energy. The component of g_p along p (no work on the unit sphere) is removed,
+so every g_p here is tangent.
 
 Kinds and deformation coordinates (points and axes in the frames of their bodies):
 
@@ -47,43 +45,13 @@ from ._values import (checked_axis, checked_vector, element_label, float64_array
                       point_arrays)
 from .element_geometry import line_length
 from .elements_series import series_kinds
+from .generalized_forces import body_torque as body_torque
+from .generalized_forces import centre_loads as centre_loads
+from .generalized_forces import gravity_forces as gravity_forces
+from .generalized_forces import point_force as point_force
+from .generalized_forces import tangent
 from .element_geometry import separation as _separation
 from .joints import _check_frame, body_selector, ground_extended, place_bodies, select_bodies
-
-
-def _tangent(p, g_p):
-    """Remove the component of g_p along p (it does no work while |p| = 1)."""
-    return g_p - p * qt.dot(p, g_p) / qt.dot(p, p)
-
-
-def point_force(p, point, force) -> Float[Array, " 7"]:
-    """Generalized force (7,) of a global force [N] at body point `point` [m] (body
-    frame) of a body with Euler parameters p: (f, 2 G^T (s' x A^T f))."""
-    a = qt.rotation_matrix(p)
-    n_body = jnp.cross(point, qt.matvec(a.T, force))
-    return jnp.concatenate([force, 2.0 * qt.matvec(qt.g_matrix(p).T, n_body)])
-
-
-def body_torque(p, torque) -> Float[Array, " 7"]:
-    """Generalized force (7,) of a global torque [N m] on a body: (0, 2 G^T A^T n)."""
-    n_body = qt.matvec(qt.rotation_matrix(p).T, torque)
-    g_p = 2.0 * qt.matvec(qt.g_matrix(p).T, n_body)
-    return jnp.concatenate([jnp.zeros(3), g_p])
-
-
-def centre_loads(q, forces, torques) -> Float[Array, " 7n"]:
-    """Generalized forces (7 n,) of global forces (n, 3) [N] at the centres of mass and
-    global torques (n, 3) [N m]; the form of the `external` hook."""
-    n = q.shape[0] // 7
-    p = q.reshape(n, 7)[:, 3:]
-    g_p = jax.vmap(lambda pi, ni: body_torque(pi, ni)[3:])(p, torques)
-    return jnp.concatenate([forces, g_p], axis=1).reshape(-1)
-
-
-def gravity_forces(mass, gravity, n) -> Float[Array, " 7n"]:
-    """Generalized gravity forces (7 n,): m_i g at each centre; gravity (3,) [m/s^2]."""
-    f = mass[:, None] * gravity[None, :]
-    return jnp.concatenate([f, jnp.zeros((n, 4))], axis=1).reshape(-1)
 
 
 # ---- build-time descriptions --------------------------------------------------
@@ -366,8 +334,8 @@ def _one_element(kind, qi, qj, vi, vj, e, z=None):
     sdot = jax.jvp(s_of, (qi, qj), (vi, vj))[1]
     force, zdot = _law_and_rate(kind, s, sdot, e, z)
     gi, gj = pullback(-force)
-    gi = jnp.concatenate([gi[:3], _tangent(qi[3:], gi[3:])])
-    gj = jnp.concatenate([gj[:3], _tangent(qj[3:], gj[3:])])
+    gi = jnp.concatenate([gi[:3], tangent(qi[3:], gi[3:])])
+    gj = jnp.concatenate([gj[:3], tangent(qj[3:], gj[3:])])
     return gi, gj, zdot
 
 
