@@ -90,7 +90,9 @@ def _optional(x):
     return x if math.isfinite(x) else None
 
 
-def _masked_max(values, mask):
+def masked_max(values, mask):
+    """The largest finite entry of ``values`` where ``mask`` holds, as a float; None
+    where there is none."""
     values = np.where(mask & np.isfinite(values), values, -np.inf)
     best = np.max(values) if values.size else -np.inf
     return float(best) if np.isfinite(best) else None
@@ -154,23 +156,23 @@ def summarize(result, friction=0.4, flange_angle_threshold=0.6) -> dict:
     wheels = []
     for ws in range(active.shape[1]):
         for side in range(2):
-            peak = _masked_max(normal[:, ws, side], active[:, ws, side])
+            peak = masked_max(normal[:, ws, side], active[:, ws, side])
             wheels.append({
                 "wheelset": ws + 1,
                 "side": SIDES[side],
                 "max_normal_force_N": peak if peak is not None or not any_valid else 0.0,
-                "max_Y_over_Q": _masked_max(ratio[:, ws, side], np.isfinite(ratio[:, ws, side])),
+                "max_Y_over_Q": masked_max(ratio[:, ws, side], np.isfinite(ratio[:, ws, side])),
                 "multi_patch_intervals_s": _runs(t, multi[:, ws, side]),
                 "tread_and_flange_intervals_s": _runs(t, tread_and_flange[:, ws, side]),
                 "flange_contact_fraction": (float(np.sum(flange[:, ws, side])) / n_valid
                                             if any_valid else None),
-                "max_rail_deflection_lateral_m": _masked_max(deflection[:, ws, side, 0], valid),
-                "max_rail_deflection_vertical_m": _masked_max(deflection[:, ws, side, 1],
-                                                              valid),
+                "max_rail_deflection_lateral_m": masked_max(deflection[:, ws, side, 0], valid),
+                "max_rail_deflection_vertical_m": masked_max(deflection[:, ws, side, 1],
+                                                             valid),
             })
     lateral = np.abs(np.asarray(result.wheelset_lateral, dtype=np.float64))
     wheelsets = [{"wheelset": ws + 1,
-                  "max_lateral_displacement_m": _masked_max(lateral[:, ws], valid)}
+                  "max_lateral_displacement_m": masked_max(lateral[:, ws], valid)}
                  for ws in range(lateral.shape[1])]
     simulated = float(np.max(t[valid])) if any_valid else 0.0
     wall = _optional(result.wall_time_s)

@@ -48,7 +48,7 @@ import re
 
 import numpy as np
 
-from ..results import (MIN_VERTICAL_FORCE_N, SIDES, _masked_max, derailment_ratio,
+from ..results import (MIN_VERTICAL_FORCE_N, SIDES, derailment_ratio, masked_max,
                        nadal_forces, nadal_limit, summarize)
 from ..standards import comfort, en14363
 from ..standards.en14363_signals import sample_rate
@@ -102,7 +102,7 @@ def wear_number(result):
 def _finite_max(x):
     """Largest finite value, NaN if there is none."""
     x = np.asarray(x, dtype=np.float64)
-    best = _masked_max(x, np.isfinite(x))
+    best = masked_max(x, np.isfinite(x))
     return np.nan if best is None else best
 
 

@@ -36,7 +36,7 @@ import jax
 import jax.numpy as jnp
 
 from ..contact.polach import polach
-from ..vehicles.initial import _wheelset_contact, wheelset_load, wheelset_rest_pose
+from ..vehicles.initial import wheelset_contact, wheelset_load, wheelset_rest_pose
 from ..vehicles.loads import resolve_contact_model
 from ..track import track_frame
 
@@ -58,8 +58,8 @@ def _at_shift(vehicle, params, track, s, load, speed, model, lateral):
     ``lateral`` [m]."""
     height, roll, _ = wheelset_rest_pose(vehicle, params, track, s, lateral, load, speed,
                                          model)
-    patches, forces = _wheelset_contact(vehicle, params, track, s, lateral, height, roll,
-                                        speed, model)
+    patches, forces = wheelset_contact(vehicle, params, track, s, lateral, height, roll,
+                                       speed, model)
     weight = jnp.where(patches.active, forces.normal_force, 0.0)
     radius = jnp.sum(weight * patches.rolling_radius, axis=1) / jnp.sum(weight, axis=1)
     normal = forces.normal_force[..., None] * patches.frame[..., :, 2]  # (2, P, 3)

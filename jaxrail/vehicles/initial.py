@@ -33,8 +33,8 @@ MAX_ROLL = 0.02  # [rad]
 STEP = 1e-8  # central-difference step in height [m] and roll [rad] of the Newton step
 
 
-def _wheelset_contact(vehicle, params, track, s, lateral, height, roll, speed, model,
-                      deflection=None):
+def wheelset_contact(vehicle, params, track, s, lateral, height, roll, speed, model,
+                     deflection=None):
     """``(patches, patch_forces)`` of a wheelset at ``s`` [m], shifted ``lateral`` [m],
     its centre ``height`` [m] above the track plane, rolled by ``roll`` [rad], moving at
     ``speed`` [m/s] and spinning at speed / nominal radius (the spin creepage of the
@@ -52,10 +52,10 @@ def _wheelset_contact(vehicle, params, track, s, lateral, height, roll, speed, m
 def _wheel_loads(vehicle, params, track, s, lateral, height, roll, speed, model,
                  deflection=None):
     """Upward wheel-rail forces [N] (2,) (left, right wheel; track normal) on the
-    wheelset of :func:`_wheelset_contact`, and the mid-overlap rolling radius [m]
+    wheelset of :func:`wheelset_contact`, and the mid-overlap rolling radius [m]
     weighted by normal force."""
-    patches, forces = _wheelset_contact(vehicle, params, track, s, lateral, height, roll,
-                                        speed, model, deflection)
+    patches, forces = wheelset_contact(vehicle, params, track, s, lateral, height, roll,
+                                       speed, model, deflection)
     up = track_frame(track, s)[:, 2]
     loads = jnp.sum(forces.force @ up, axis=1)
     weight = jnp.where(patches.active, forces.normal_force, 0.0)
@@ -256,8 +256,8 @@ def _rest_on_flexible_rails(vehicle, params, track, stations, shift, load, speed
         for _ in range(REST_PASSES - 1):
             height, roll, _ = wheelset_rest_pose(vehicle, params, track, s, shift(s), load,
                                                  speed, model, w)
-            patches, forces = _wheelset_contact(vehicle, params, track, s, shift(s), height,
-                                                roll, speed, model, w)
+            patches, forces = wheelset_contact(vehicle, params, track, s, shift(s), height,
+                                               roll, speed, model, w)
             w = w.at[:, 0].set(support.static_deflection(rail_loads(track, patches,
                                                                     forces))[:, 0])
         height, roll, radius = wheelset_rest_pose(vehicle, params, track, s, shift(s), load,
