@@ -7,7 +7,7 @@ from ._options import emit_json
 
 
 def vehicle_command(args):
-    from ..vehicles.report import format_report, vehicle_list, vehicle_report
+    from ..stability.vehicle_report import format_report, vehicle_list, vehicle_report
 
     if args.vehicle_command == "list":
         for name, description in vehicle_list():

@@ -1,13 +1,16 @@
 """What ``jaxrail vehicle list`` and ``jaxrail vehicle show`` report: the built-in
 vehicles, and a vehicle's bodies, masses, wheel loads at rest and modes standing on the
 track with its wheelsets clamped (:mod:`jaxrail.stability.standing`, which says how the
-wheelsets are held and how the modes are named)."""
+wheelsets are held and how the modes are named). It sits in ``stability``, above
+``vehicles``, because the modes are a stability computation."""
 
 import math
 
 import numpy as np
 
-from .from_file import read_toml, vehicle_file_path, vehicle_from_file, vehicle_names
+from ..vehicles.from_file import (read_toml, vehicle_file_path, vehicle_from_file,
+                                  vehicle_names)
+from .standing import vehicle_modes
 
 HELD = ("each wheelset clamped to the track at its rest pose: at rest the creep forces "
         "vanish, so the contact holds the wheelsets neither longitudinally nor in yaw; "
@@ -16,7 +19,8 @@ HELD = ("each wheelset clamped to the track at its rest pose: at rest the creep 
 
 
 def vehicle_list() -> list[tuple[str, str]]:
-    """``(name, description)`` of each built-in vehicle file (:func:`vehicle_names`)."""
+    """``(name, description)`` of each built-in vehicle file
+    (:func:`jaxrail.vehicles.vehicle_names`)."""
     return [(name, str(read_toml(vehicle_file_path(name))["vehicle"].get("description", "")))
             for name in vehicle_names()]
 
@@ -37,8 +41,6 @@ def vehicle_report(name_or_path, model=None) -> dict:
     ``motion``, ``time_constant_s`` (real modes; else null), ``eigenvalue_1_s``
     [re, im], ``energy_share``); ``equilibrium_residual_m_s2``. ``model``: the contact
     model of the rest pose (default the paper's search)."""
-    from ..stability.standing import vehicle_modes
-
     path = vehicle_file_path(name_or_path)
     table = read_toml(path)["vehicle"]
     vehicle, params = vehicle_from_file(path)
