@@ -1,7 +1,7 @@
 """Force elements: their kinds (:data:`FORCE_KINDS`) and their generalized forces.
 
 The generalized force of a force or torque on a body (the Euler-parameter (pdot)
-convention) is :mod:`.generalized_forces`; its names ``point_force``, ``body_torque``,
+convention) is :mod:`.applied_forces`; its names ``point_force``, ``body_torque``,
 ``centre_loads`` and ``gravity_forces`` are importable from here as well.
 
 Suspension elements (spring-dampers, bushings, bump stops) between body i and body j
@@ -45,11 +45,11 @@ from ._values import (checked_axis, checked_vector, element_label, float64_array
                       point_arrays)
 from .element_geometry import line_length
 from .elements_series import series_kinds
-from .generalized_forces import body_torque as body_torque
-from .generalized_forces import centre_loads as centre_loads
-from .generalized_forces import gravity_forces as gravity_forces
-from .generalized_forces import point_force as point_force
-from .generalized_forces import tangent
+from .applied_forces import body_torque as body_torque
+from .applied_forces import centre_loads as centre_loads
+from .applied_forces import gravity_forces as gravity_forces
+from .applied_forces import point_force as point_force
+from .applied_forces import tangent
 from .element_geometry import separation as _separation
 from .joints import _check_frame, body_selector, ground_extended, place_bodies, select_bodies
 

@@ -1,4 +1,5 @@
-"""Generalized forces in the Euler-parameter (pdot) convention.
+"""Generalized forces of forces and torques applied to a body, in the Euler-parameter
+(pdot) convention.
 
 A force f (global, [N]) at the body point s' [m] (body frame) and a torque n (global,
 [N m]) on body i do the virtual work f . delta r_P + n . delta pi, which in the
