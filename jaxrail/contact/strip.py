@@ -30,7 +30,7 @@ import numpy as np
 from jax.custom_derivatives import SymbolicZero
 from jaxtyping import Array, Float
 
-from ..profiles._base import Profile, frozen
+from ..profiles import Profile, frozen
 
 RAIL_NEWTON_STEPS = 5
 

@@ -64,6 +64,7 @@ from .loads import SystemLoads as SystemLoads
 from .integrate import rhs as rhs
 from .integrate import simulate_system as simulate_system
 from .state import State as State
+from ._when import computed_when as computed_when
 from .elements_series import AirSpring as AirSpring
 from .elements_series import MaxwellDamper as MaxwellDamper
 
@@ -72,7 +73,8 @@ __all__ = ["AbstractLoads", "acceleration_response", "accelerations",
            "FixedLoads", "initial_element_states", "initial_state", "MaxwellDamper",
            "State", "angular_momentum", "angular_velocity", "body_pose", "BodyParams",
            "build_system", "BumpStop", "BumpStopParams", "Bushing", "BushingParams",
-           "consistent_initial_conditions", "constraint_violation", "constraints",
+           "computed_when", "consistent_initial_conditions", "constraint_violation",
+           "constraints",
            "Fixed", "generalized_forces", "GROUND", "join_coordinates", "JointParams",
            "kinetic_energy", "mass_matrix", "point_position", "point_velocity",
            "potential_energy", "Prismatic", "project_state", "quadratic_velocity",

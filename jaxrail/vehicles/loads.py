@@ -27,9 +27,8 @@ from .._constants import CONTACT_MODELS as CONTACT_MODELS
 from ..contact.search import search_wheelset
 from ..contact.table import ContactTable, table_patches
 from ..contact.table_cache import contact_table
-from ..multibody import AbstractLoads, accelerations
+from ..multibody import AbstractLoads, accelerations, computed_when
 from ..multibody import quaternion as qt
-from ..multibody._when import computed_when
 from ..multibody.forces import body_torque
 from ..track import track_frame
 from .vehicle import Vehicle, VehicleParams, wheelset_states
