@@ -6,10 +6,12 @@ The ramp falls at ``--rate`` (default four times GENSYS's 5 km/h per second, so 
 the run from above the linear critical speed stays short; the ramp-down then reads up
 to rate * window / 2 = 1.4 m/s low, and brute force refines it to ``--resolution``).
 "Without yaw dampers" sets their series stiffness to 1 N/m, as `run.py` does.
+``--ramp-only`` runs the ramp-down alone (brute force costs several constant-speed runs
+of 5 s per batch, over an hour per case on this 2-core machine when it is shared).
 
 Writes ``nonlinear.json`` beside this file (``--out``).
 Usage: ``python experiments/coach_stability/nonlinear.py [--with LO:HI] [--without LO:HI]
-[--rate M_S2] [--resolution M_S] [--out FILE]``.
+[--rate M_S2] [--resolution M_S] [--ramp-only] [--out FILE]``.
 """
 
 import argparse
@@ -25,8 +27,9 @@ jaxrail.enable_float64()
 
 from jaxrail.scenarios import parse_scenario  # noqa: E402
 from jaxrail.simulation import SolverOptions  # noqa: E402
-from jaxrail.stability.nonlinear import GENSYS_RATE  # noqa: E402
+from jaxrail.stability.nonlinear import GENSYS_RATE, ramp_down  # noqa: E402
 from jaxrail.stability.report import nonlinear_study, speed_range  # noqa: E402
+from jaxrail.track import straight_track  # noqa: E402
 from jaxrail.vehicles import contact_model, set_values  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -42,6 +45,7 @@ def main():
     parser.add_argument("--rate", type=float, default=4.0 * GENSYS_RATE)
     parser.add_argument("--resolution", type=float, default=2.0)
     parser.add_argument("--only", choices=("with", "without"))
+    parser.add_argument("--ramp-only", action="store_true")
     parser.add_argument("--out", default=str(Path(__file__).with_name("nonlinear.json")))
     args = parser.parse_args()
     start = time.perf_counter()
@@ -59,9 +63,19 @@ def main():
             continue
         low, high = speed_range(limits, f"--{label}")
         began = time.perf_counter()
-        study = nonlinear_study(vehicle, p, track, low, high, rate=args.rate,
-                                resolution=args.resolution, options=options, model=model,
-                                progress=lambda line: print(line, file=sys.stderr, flush=True))
+        if args.ramp_only:  # the straight nonlinear_study runs the ramp on
+            hold = 2.0
+            long = straight_track(100.0 + high * (hold + (high - low) / args.rate),
+                                  rail_centre_distance=track.rail_centre_distance)
+            ramp = ramp_down(vehicle, p, long, high, low, rate=args.rate, hold=hold,
+                             options=options, contact_model=model)
+            study = {"ramp_down_critical_speed_m_s": ramp["critical_speed_m_s"],
+                     "nonlinear_critical_speed_m_s": None, "ramp_down": ramp}
+        else:
+            study = nonlinear_study(vehicle, p, track, low, high, rate=args.rate,
+                                    resolution=args.resolution, options=options, model=model,
+                                    progress=lambda line: print(line, file=sys.stderr,
+                                                                flush=True))
         study["wall_s"] = time.perf_counter() - began
         study["range_m_s"] = [low, high]
         out[f"{label}_yaw_dampers"] = study
