@@ -101,3 +101,37 @@ def test_a_damaged_file_is_traced_again(tmp_path):
     np.testing.assert_allclose(out["x"], damped(x, 0.5)["x"], rtol=1e-15)
     assert isinstance(export.deserialize(programs.pickle.loads(file.read_bytes())[0]),
                       export.Exported)
+
+
+def test_an_inner_function_traced_with_host_callbacks_is_traced_again():
+    """An inner jitted function first traced with equinox's check as a host callback
+    would bring that callback into the exported program: the export clears JAX's trace
+    caches and traces again."""
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    from jaxrail.compilation.compiler import _checks_as_nan
+    from jaxrail.compilation.programs import compile_through_program_cache
+
+    @jax.jit
+    def inner(x):
+        return eqx.error_if(x, x < 0.0, "negative") * 2.0
+
+    x = jnp.ones(3)
+    inner(x)  # traced with the check as a host callback (equinox's default)
+    calls = []
+    original = jax.clear_caches
+
+    def counting():
+        calls.append(1)
+        original()
+
+    jax.clear_caches = counting
+    try:
+        with _checks_as_nan():  # as jaxrail's compiler traces
+            run = compile_through_program_cache(lambda y: inner(y) + 1.0, None, None, x)
+    finally:
+        jax.clear_caches = original
+    assert float(run(x)[0]) == 3.0
+    assert len(calls) == 1  # the first export met the cached callback

@@ -111,6 +111,27 @@ def _keep(path, exported, skeleton):
                       stacklevel=3)
 
 
+def _export(flat, arrays):
+    """``flat`` traced and exported for the shapes of ``arrays``. jaxrail's own FFI
+    target (the progress report) is registered by every process that loads the program
+    (.compiler). An inner jitted function that this process first traced with
+    equinox's checks as host callbacks (outside jaxrail's programs, which make them
+    NaN) brings its cached trace, callbacks and all, into the program, which cannot be
+    exported: then JAX's trace caches are cleared and the program traced once more."""
+    def exported():
+        return export.export(jax.jit(flat), disabled_checks=[
+            export.DisabledSafetyCheck.custom_call(TIME_REPORT_TARGET)])(
+            *(jax.ShapeDtypeStruct(x.shape, x.dtype) for x in arrays))
+
+    try:
+        return exported()
+    except NotImplementedError as error:
+        if "host_callbacks" not in str(error):
+            raise
+        jax.clear_caches()
+        return exported()
+
+
 def compile_through_program_cache(function, folder, xla_options, /, *args, **kwargs):
     """``function(*args, **kwargs)`` compiled with ``xla_options``: a callable of the
     same arguments (the arrays may change, not the rest). The traced program comes from
@@ -132,14 +153,10 @@ def compile_through_program_cache(function, folder, xla_options, /, *args, **kwa
             skeleton.append(jax.tree.map(lambda x: jax.ShapeDtypeStruct(x.shape, x.dtype), out))
             return jax.tree.leaves(out)
 
-        # jaxrail's own FFI target (the progress report) is registered by every
-        # process that loads the program (.compiler)
-        exported = export.export(jax.jit(flat), disabled_checks=[
-            export.DisabledSafetyCheck.custom_call(TIME_REPORT_TARGET)])(
-            *(jax.ShapeDtypeStruct(x.shape, x.dtype) for x in arrays))
-        loaded = exported, skeleton[0]
+        exported = _export(flat, arrays)
+        loaded = exported, skeleton[-1]
         if path is not None:
-            _keep(path, exported, skeleton[0])
+            _keep(path, exported, skeleton[-1])
     exported, skeleton = loaded
     compiled = jax.jit(exported.call).lower(*arrays).compile(xla_options)
     out_tree = jax.tree.structure(skeleton)
