@@ -25,15 +25,13 @@ import jaxrail
 
 jaxrail.enable_float64()
 
-from jaxrail.scenarios import parse_scenario  # noqa: E402
-from jaxrail.simulation import SolverOptions  # noqa: E402
 from jaxrail.stability.nonlinear import GENSYS_RATE, ramp_down  # noqa: E402
-from jaxrail.stability.report import nonlinear_study, speed_range  # noqa: E402
-from jaxrail.track import straight_track  # noqa: E402
-from jaxrail.vehicles import contact_model, set_values  # noqa: E402
+from jaxrail.stability.report import (nonlinear_options, nonlinear_study,  # noqa: E402
+                                      ramp_track, speed_range)
+from jaxrail.vehicles import set_values  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).parent))
-from run import SCENARIO, SERIES  # noqa: E402
+from run import SERIES, coach  # noqa: E402
 
 
 def main():
@@ -49,11 +47,8 @@ def main():
     parser.add_argument("--out", default=str(Path(__file__).with_name("nonlinear.json")))
     args = parser.parse_args()
     start = time.perf_counter()
-    scenario = parse_scenario(SCENARIO, "coach-straight")
-    vehicle, params, track = scenario.build()
-    model = contact_model("table", vehicle, params)
-    options = SolverOptions(rtol=scenario.rtol, atol=scenario.atol, integrator="imex",
-                            jacobian_every=scenario.jacobian_every)
+    scenario, vehicle, params, track, model = coach()
+    options = nonlinear_options(scenario)
     out = {"experiment": "coach_stability nonlinear", "load_before": os.getloadavg(),
            "rate_m_s2": args.rate, "resolution_m_s": args.resolution}
     cases = {"with": (params, args.with_),
@@ -65,10 +60,9 @@ def main():
         began = time.perf_counter()
         if args.ramp_only:  # the straight nonlinear_study runs the ramp on
             hold = 2.0
-            long = straight_track(100.0 + high * (hold + (high - low) / args.rate),
-                                  rail_centre_distance=track.rail_centre_distance)
-            ramp = ramp_down(vehicle, p, long, high, low, rate=args.rate, hold=hold,
-                             options=options, contact_model=model)
+            ramp = ramp_down(vehicle, p, ramp_track(track, low, high, args.rate, hold), high,
+                             low, rate=args.rate, hold=hold, options=options,
+                             contact_model=model)
             study = {"ramp_down_critical_speed_m_s": ramp["critical_speed_m_s"],
                      "nonlinear_critical_speed_m_s": None, "ramp_down": ramp}
         else:

@@ -24,9 +24,8 @@ import jaxrail
 jaxrail.enable_float64()
 
 from jaxrail.scenarios import parse_scenario  # noqa: E402
-from jaxrail.simulation import SolverOptions  # noqa: E402
 from jaxrail.stability.critical import LinearStability  # noqa: E402
-from jaxrail.stability.report import nonlinear_study, speed_range  # noqa: E402
+from jaxrail.stability.report import nonlinear_options, nonlinear_study, speed_range  # noqa: E402
 from jaxrail.vehicles import contact_model, get_values, set_values  # noqa: E402
 
 SCENARIO = """
@@ -53,6 +52,14 @@ FRACTIONS = (1.0, 0.3, 0.1, 0.03)  # of the shipped yaw damping, tried in turn
 RELATIVE_STEP = 1e-2  # central differences at c (1 +- this)
 
 
+def coach():
+    """``(scenario, vehicle, params, track, model)`` of the coach on straight track, the
+    contact table."""
+    scenario = parse_scenario(SCENARIO, "coach-straight")
+    vehicle, params, track = scenario.build()
+    return scenario, vehicle, params, track, contact_model("table", vehicle, params)
+
+
 def linear(stability, params, points=8):
     """(critical SpeedPoint, root locus) of one parameter set."""
     import numpy as np
@@ -73,9 +80,7 @@ def main():
     parser.add_argument("--out", default=str(Path(__file__).with_name("results.json")))
     args = parser.parse_args()
     start = time.perf_counter()
-    scenario = parse_scenario(SCENARIO, "coach-straight")
-    vehicle, params, track = scenario.build()
-    model = contact_model("table", vehicle, params)
+    scenario, vehicle, params, track, model = coach()
     stability = LinearStability(vehicle, params, track, model)
     out = {"experiment": "coach_stability", "load_before": os.getloadavg()}
     c0 = float(get_values(vehicle, params, [YAW])[0])
@@ -120,8 +125,7 @@ def main():
 
     if args.nonlinear:
         low, high = speed_range(args.nonlinear, "--nonlinear")
-        options = SolverOptions(rtol=scenario.rtol, atol=scenario.atol, integrator="imex",
-                                jacobian_every=scenario.jacobian_every)
+        options = nonlinear_options(scenario)
         for label, p in (("with", params), ("without", without)):  # noqa: B007
             out[f"nonlinear_{label}_yaw_dampers"] = nonlinear_study(
                 vehicle, p, track, low, high, rate=5.0 / 3.6, resolution=1.0,

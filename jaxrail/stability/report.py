@@ -167,6 +167,13 @@ def format_study(study: dict) -> str:
     return "\n".join(lines)
 
 
+def ramp_track(track, low, high, rate, hold):
+    """A straight with ``track``'s rail centre distance long enough [m] for the
+    ramp-down from ``high`` to ``low`` [m/s] at ``rate`` [m/s^2] after ``hold`` [s]."""
+    length = 100.0 + high * (hold + (high - low) / rate)
+    return straight_track(length, rail_centre_distance=track.rail_centre_distance)
+
+
 def nonlinear_study(vehicle, params, track, low, high, rate=GENSYS_RATE, resolution=0.5,
                     hold=2.0, options=None, model=None, progress=None) -> dict:
     """The nonlinear critical speed over ``[low, high]`` [m/s] by both methods
@@ -177,8 +184,7 @@ def nonlinear_study(vehicle, params, track, low, high, rate=GENSYS_RATE, resolut
     definition); the ramp-down's is beside it with their relative difference."""
     check_straight(track)
     options = SolverOptions(integrator="imex") if options is None else options
-    length = 100.0 + high * (hold + (high - low) / rate)
-    long = straight_track(length, rail_centre_distance=track.rail_centre_distance)
+    long = ramp_track(track, low, high, rate, hold)
     ramp = ramp_down(vehicle, params, long, high, low, rate=rate, hold=hold, options=options,
                      contact_model=model)
     if progress is not None:
