@@ -1,0 +1,101 @@
+"""How long does the test suite spend compiling? Runs the suite (of the working tree,
+or of a git revision checked out into a temporary worktree) with empty compilation
+caches and prints JSON: the suite's wall time and exit code, and JAX's compile events
+(XLA's backend compile, tracing, lowering) summed over every Python process of the run
+(pytest's workers and the processes the tests start; ``_suite_compile/sitecustomize.py``),
+per test file and for the costliest tests.
+
+    python benchmarks/suite_compile.py [--revision REV] [--out FILE] [-- pytest args]
+
+The events are wall-clock seconds as JAX reports them, so run it on a quiet machine
+and compare revisions in one session (the load is in the JSON).
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from collections import defaultdict
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SITE = Path(__file__).resolve().parent / "_suite_compile"  # its sitecustomize.py
+FIELDS = ("compile_s", "trace_s", "lower_s", "programs")
+
+
+def _summed(reports):
+    tests = defaultdict(lambda: dict.fromkeys(FIELDS, 0.0))
+    for report in reports:
+        for nodeid, entry in report["tests"].items():
+            for field in FIELDS:
+                tests[nodeid][field] += entry.get(field, 0.0)
+    return tests
+
+
+def summarise(reports, top=30):
+    """The suite's totals, per file and the ``top`` costliest tests, from the
+    processes' reports."""
+    tests = _summed(reports)
+    files = defaultdict(lambda: dict.fromkeys(FIELDS, 0.0))
+    for nodeid, entry in tests.items():
+        for field in FIELDS:
+            files[nodeid.split("::")[0]][field] += entry[field]
+    total = {field: sum(entry[field] for entry in tests.values()) for field in FIELDS}
+
+    def ranked(table):
+        rows = sorted(table.items(), key=lambda kv: -kv[1]["compile_s"])[:top]
+        return [{"name": name, **{f: round(v, 2) for f, v in entry.items()}}
+                for name, entry in rows]
+    return {"total": {f: round(v, 1) for f, v in total.items()},
+            "processes": len(reports), "files": ranked(files), "tests": ranked(tests)}
+
+
+def run_suite(tree: Path, pytest_args, out: Path):
+    cache = Path(tempfile.mkdtemp(prefix="suite-cache-"))
+    env = dict(os.environ, SUITE_COMPILE_OUT=str(out), JAXRAIL_CACHE_DIR=str(cache),
+               JAX_COMPILATION_CACHE_DIR=str(cache / "xla"),
+               PYTHONPATH=os.pathsep.join([str(tree), str(SITE)]))
+    start = time.perf_counter()
+    done = subprocess.run([sys.executable, "-m", "pytest", "-q", *pytest_args], cwd=tree, env=env,
+                          capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    tail = done.stdout.strip().splitlines()[-1:] if done.stdout.strip() else []
+    return {"wall_s": round(wall, 1), "returncode": done.returncode, "summary": tail}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--revision", help="a git revision instead of the working tree")
+    parser.add_argument("--out", help="also write the JSON here")
+    parser.add_argument("pytest_args", nargs="*")
+    args = parser.parse_args()
+    load = os.getloadavg()
+    with tempfile.TemporaryDirectory() as scratch:
+        tree = ROOT
+        if args.revision:
+            tree = Path(scratch) / "tree"
+            subprocess.run(["git", "worktree", "add", "--detach", str(tree), args.revision],
+                           cwd=ROOT, check=True, capture_output=True)
+        try:
+            events = Path(scratch) / "events"
+            run = run_suite(tree, args.pytest_args, events)
+            reports = [json.loads(p.read_text()) for p in sorted(events.glob("*.json"))]
+        finally:
+            if args.revision:
+                subprocess.run(["git", "worktree", "remove", "--force", str(tree)],
+                               cwd=ROOT, capture_output=True)
+    result = {"revision": args.revision or "working tree", **run,
+              "load_at_start": [round(x, 2) for x in load],
+              "load_at_end": [round(x, 2) for x in os.getloadavg()],
+              **summarise(reports)}
+    text = json.dumps(result, indent=1)
+    if args.out:
+        Path(args.out).write_text(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
