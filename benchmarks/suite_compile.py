@@ -23,7 +23,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 SITE = Path(__file__).resolve().parent / "_suite_compile"  # its sitecustomize.py
-FIELDS = ("compile_s", "trace_s", "lower_s", "programs")
+FIELDS = ("compile_s", "compile_cpu_s", "trace_s", "lower_s", "programs")
 
 
 def _summed(reports):

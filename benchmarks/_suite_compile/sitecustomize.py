@@ -4,15 +4,21 @@ process that ``benchmarks/suite_compile.py`` starts (this folder is on their
 line, the README's and the how-to guides' commands).
 
 Only when ``$SUITE_COMPILE_OUT`` is set: JAX's duration events (XLA's backend compile,
-tracing to a jaxpr, lowering to MLIR; wall-clock seconds as JAX reports them) are added
-up under the test running at that moment (``$PYTEST_CURRENT_TEST``, which pytest sets
-and child processes inherit), and written at exit to ``$SUITE_COMPILE_OUT/<pid>.json``.
+tracing to a jaxpr, lowering to MLIR; wall-clock seconds as JAX reports them) and the
+process's CPU seconds in XLA's backend compile (``compile_cpu_s``, around
+``jax._src.compiler.backend_compile_and_load``: what the machine's load does not
+inflate, unlike the wall-clock events; it also counts any other thread of the process
+busy meanwhile) are added up under the test running at that moment
+(``$PYTEST_CURRENT_TEST``, which pytest sets and child processes inherit), and written
+at exit to ``$SUITE_COMPILE_OUT/<pid>.json``.
 """
 
 import atexit
+import functools
 import json
 import os
 import sys
+import time
 from collections import defaultdict
 from pathlib import Path
 
@@ -25,14 +31,16 @@ OUTSIDE = "<outside tests>"
 def _install(out: Path):
     totals = defaultdict(lambda: defaultdict(float))
 
+    def test():
+        return os.environ.get("PYTEST_CURRENT_TEST", OUTSIDE).rsplit(" (", 1)[0]
+
     def listener(event, duration_secs, **_):
         field = EVENTS.get(event)
         if field is None:
             return
-        test = os.environ.get("PYTEST_CURRENT_TEST", OUTSIDE).rsplit(" (", 1)[0]
-        totals[test][field] += duration_secs
+        totals[test()][field] += duration_secs
         if field == "compile_s":
-            totals[test]["programs"] += 1
+            totals[test()]["programs"] += 1
 
     def write():
         if not totals:
@@ -46,8 +54,20 @@ def _install(out: Path):
         tmp.write_text(json.dumps(payload))
         tmp.replace(path)
 
+    import jax._src.compiler as compiler
     import jax.monitoring
     jax.monitoring.register_event_duration_secs_listener(listener)
+    backend_compile = compiler.backend_compile_and_load
+
+    @functools.wraps(backend_compile)
+    def timed_backend_compile(*args, **kwargs):
+        start = time.process_time()
+        try:
+            return backend_compile(*args, **kwargs)
+        finally:
+            totals[test()]["compile_cpu_s"] += time.process_time() - start
+
+    compiler.backend_compile_and_load = timed_backend_compile
     atexit.register(write)
 
 
