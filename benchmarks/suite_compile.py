@@ -27,11 +27,14 @@ FIELDS = ("compile_s", "compile_cpu_s", "trace_s", "lower_s", "programs")
 
 
 def _summed(reports):
+    """Per test, the fields summed over the processes' lines ``[test, field, seconds]``
+    (``programs``: the XLA compiles counted)."""
     tests = defaultdict(lambda: dict.fromkeys(FIELDS, 0.0))
-    for report in reports:
-        for nodeid, entry in report["tests"].items():
-            for field in FIELDS:
-                tests[nodeid][field] += entry.get(field, 0.0)
+    for lines in reports:
+        for test, field, seconds in lines:
+            tests[test][field] += seconds
+            if field == "compile_s":
+                tests[test]["programs"] += 1
     return tests
 
 
@@ -82,7 +85,8 @@ def main():
         try:
             events = Path(scratch) / "events"
             run = run_suite(tree, args.pytest_args, events)
-            reports = [json.loads(p.read_text()) for p in sorted(events.glob("*.json"))]
+            reports = [[json.loads(line) for line in p.read_text().splitlines() if line]
+                       for p in sorted(events.glob("*.jsonl"))]
         finally:
             if args.revision:
                 subprocess.run(["git", "worktree", "remove", "--force", str(tree)],

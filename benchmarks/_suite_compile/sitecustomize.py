@@ -8,18 +8,16 @@ tracing to a jaxpr, lowering to MLIR; wall-clock seconds as JAX reports them) an
 process's CPU seconds in XLA's backend compile (``compile_cpu_s``, around
 ``jax._src.compiler.backend_compile_and_load``: what the machine's load does not
 inflate, unlike the wall-clock events; it also counts any other thread of the process
-busy meanwhile) are added up under the test running at that moment
-(``$PYTEST_CURRENT_TEST``, which pytest sets and child processes inherit), and written
-at exit to ``$SUITE_COMPILE_OUT/<pid>.json``.
+busy meanwhile), each under the test running at that moment (``$PYTEST_CURRENT_TEST``,
+which pytest sets and child processes inherit), appended as they come to
+``$SUITE_COMPILE_OUT/<pid>.jsonl``, one ``[test, field, seconds]`` line each: pytest-xdist's
+workers end without running ``atexit``, so nothing waits for the process's end.
 """
 
-import atexit
 import functools
 import json
 import os
-import sys
 import time
-from collections import defaultdict
 from pathlib import Path
 
 EVENTS = {"/jax/core/compile/backend_compile_duration": "compile_s",
@@ -29,30 +27,18 @@ OUTSIDE = "<outside tests>"
 
 
 def _install(out: Path):
-    totals = defaultdict(lambda: defaultdict(float))
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / f"{os.getpid()}.jsonl"
 
-    def test():
-        return os.environ.get("PYTEST_CURRENT_TEST", OUTSIDE).rsplit(" (", 1)[0]
+    def record(field, seconds):
+        test = os.environ.get("PYTEST_CURRENT_TEST", OUTSIDE).rsplit(" (", 1)[0]
+        with open(path, "a") as file:
+            file.write(json.dumps([test, field, seconds]) + "\n")
 
     def listener(event, duration_secs, **_):
         field = EVENTS.get(event)
-        if field is None:
-            return
-        totals[test()][field] += duration_secs
-        if field == "compile_s":
-            totals[test()]["programs"] += 1
-
-    def write():
-        if not totals:
-            return
-        out.mkdir(parents=True, exist_ok=True)
-        payload = {"pid": os.getpid(), "argv": sys.argv[:3],
-                   "worker": os.environ.get("PYTEST_XDIST_WORKER"),
-                   "tests": {k: dict(v) for k, v in totals.items()}}
-        path = out / f"{os.getpid()}.json"
-        tmp = path.with_suffix(".part")
-        tmp.write_text(json.dumps(payload))
-        tmp.replace(path)
+        if field is not None:
+            record(field, duration_secs)
 
     import jax._src.compiler as compiler
     import jax.monitoring
@@ -65,10 +51,9 @@ def _install(out: Path):
         try:
             return backend_compile(*args, **kwargs)
         finally:
-            totals[test()]["compile_cpu_s"] += time.process_time() - start
+            record("compile_cpu_s", time.process_time() - start)
 
     compiler.backend_compile_and_load = timed_backend_compile
-    atexit.register(write)
 
 
 if os.environ.get("SUITE_COMPILE_OUT"):
