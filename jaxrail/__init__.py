@@ -24,7 +24,7 @@ _LAZY = {
     "s1002": "profiles", "simplified_s1002": "profiles", "uic60": "profiles",
     "read_profile": "profiles", "rail_offset": "profiles",
     "Track": "track", "straight_track": "track", "Straight": "track",
-    "Transition": "track", "Arc": "track",
+    "Transition": "track", "Arc": "track", "Rails": "track",
     "identify": "identification", "Measurements": "identification",
     "read_measurements": "identification",
     "run_montecarlo": "montecarlo", "run_samples": "montecarlo",

@@ -4,7 +4,8 @@ Conventions: global X, Y horizontal, Z up; the track is planar. Track frame
 ``[t n b]``: t along the direction of travel, n to the left, b up, rolled about t by
 the cant (banked toward the inside of the curve). Curvature and cant are signed:
 positive for a left curve. A track may carry irregularities
-(:mod:`jaxrail.track.irregularity`) that move each rail from its design place;
+(:mod:`jaxrail.track.irregularity`) that move each rail from its design place. Its
+:class:`Rails` are the rail profile and the offset that sets the gauge;
 :mod:`jaxrail.track.rails` is the one place that says where the rail under a wheel is.
 See docs/track.md.
 """
@@ -28,6 +29,9 @@ from .projection import project as project
 from .projection import to_track_coordinates as to_track_coordinates
 from .flexible import FlexibleTrack as FlexibleTrack
 from .rails import HALF_TAPING_DISTANCE as HALF_TAPING_DISTANCE
+from .rails import Rails as Rails
+from .rails import STANDARD_GAUGE as STANDARD_GAUGE
+from .rails import standard_rails as standard_rails
 from .rails import rail_displacement as rail_displacement
 from .rails import rail_frame as rail_frame
 from .rails import rail_point as rail_point
@@ -39,6 +43,6 @@ from .rails import wheel_origin as wheel_origin
 __all__ = ["Arc", "FlexibleTrack", "cant_angle", "centreline_position", "CHANNELS", "curvature",
            "curve_layout", "from_track_coordinates", "HALF_TAPING_DISTANCE", "heading",
            "Irregularity", "project", "rail_displacement", "rail_frame", "rail_point",
-           "rail_under_wheel", "Straight", "straight_track", "superelevation",
-           "to_track_coordinates", "Track", "track_frame", "track_irregularity",
-           "Transition", "wheel_height", "wheel_origin"]
+           "rail_under_wheel", "Rails", "STANDARD_GAUGE", "standard_rails", "Straight",
+           "straight_track", "superelevation", "to_track_coordinates", "Track", "track_frame",
+           "track_irregularity", "Transition", "wheel_height", "wheel_origin"]

@@ -39,6 +39,7 @@ from .._float64 import require_float64
 from .geometry import local_heading, local_offset
 from .flexible import FlexibleTrack
 from .irregularity import Irregularity
+from .rails import Rails, standard_rails
 
 
 class Straight(eqx.Module):
@@ -86,6 +87,9 @@ class Track(eqx.Module):
             cant is measured (scalar).
         sample_s, sample_xy: coarse centreline samples for the projection's initial
             guess, ``(m,)`` [m] and ``(m, 2)`` [m]; ``m`` is static.
+        rails: the track's :class:`~jaxrail.track.rails.Rails` (their profile and the
+            offset that sets the gauge; :meth:`with_rails`), UIC60 1:40 at 1.435 m
+            unless given (:func:`~jaxrail.track.rails.standard_rails`).
         kinds: segment kinds ('straight', 'arc', 'transition'), static.
         irregularity: the track's :class:`~jaxrail.track.irregularity.Irregularity`, or
             None for the ideal track (:meth:`with_irregularity`).
@@ -107,6 +111,7 @@ class Track(eqx.Module):
     rail_centre_distance: Float[Array, ""]
     sample_s: Float[Array, " m"]
     sample_xy: Float[Array, "m 2"]
+    rails: Rails
     kinds: tuple[str, ...] = eqx.field(static=True)
     irregularity: Irregularity | None = None
     support: FlexibleTrack | None = None
@@ -117,6 +122,10 @@ class Track(eqx.Module):
             raise TypeError(f"support must be a FlexibleTrack or None, got "
                             f"{type(support).__name__}")
         return dataclasses.replace(self, support=support)
+
+    def with_rails(self, rails: Rails) -> "Track":
+        """This layout with ``rails``."""
+        return dataclasses.replace(self, rails=_checked_rails(rails))
 
     def with_irregularity(self, irregularity: Irregularity | None) -> "Track":
         """This layout with ``irregularity`` (None: the ideal track)."""
@@ -143,6 +152,7 @@ class Track(eqx.Module):
         rail_centre_distance: Float[ArrayLike, ""] = 1.5,
         allow_curvature_jumps: bool = False,
         samples_per_segment: int = 16,
+        rails: Rails | None = None,
     ) -> "Track":
         """Build a track from a layout.
 
@@ -154,6 +164,8 @@ class Track(eqx.Module):
                 directly followed by an arc). Cant steps are never accepted.
             samples_per_segment: coarse samples per segment for the projection's
                 initial guess (static).
+            rails: the track's :class:`~jaxrail.track.rails.Rails` (default
+                :func:`~jaxrail.track.rails.standard_rails`).
 
         Raises ``ValueError`` naming the segment index for non-positive lengths or
         radii, unknown directions, |cant| >= rail_centre_distance, transitions without
@@ -189,7 +201,8 @@ class Track(eqx.Module):
         signs = tuple(_direction_sign(seg) if isinstance(seg, Arc) else 0.0 for seg in segments)
         start = jnp.stack([_scalar(v, "start") for v in start])
         arrays = _assemble(lengths, radii, cants, start, kinds, signs, samples_per_segment)
-        return cls(**arrays, rail_centre_distance=base, kinds=kinds)
+        rails = standard_rails() if rails is None else _checked_rails(rails)
+        return cls(**arrays, rail_centre_distance=base, rails=rails, kinds=kinds)
 
 
 @functools.partial(jax.jit, static_argnums=(4, 5, 6))
@@ -240,6 +253,12 @@ def _assemble(lengths, radii, cants, start, kinds, signs, samples_per_segment):
         sample_s=(seg_start[:, None] + sigma).reshape(-1),
         sample_xy=sample_xy,
     )
+
+
+def _checked_rails(rails):
+    if not isinstance(rails, Rails):
+        raise TypeError(f"rails must be Rails, got {type(rails).__name__}")
+    return rails
 
 
 def _kind(seg) -> str:
@@ -376,8 +395,10 @@ def straight_track(
     length: Float[ArrayLike, ""],
     start: tuple = (0.0, 0.0, 0.0),
     rail_centre_distance: Float[ArrayLike, ""] = 1.5,
+    rails: Rails | None = None,
 ) -> Track:
-    """A :class:`Track` of one straight of ``length`` [m] from ``start`` (X0, Y0, heading0)."""
+    """A :class:`Track` of one straight of ``length`` [m] from ``start`` (X0, Y0, heading0)
+    with ``rails`` (default :func:`~jaxrail.track.rails.standard_rails`)."""
     return Track.from_segments(
-        [Straight(length)], start=start, rail_centre_distance=rail_centre_distance
-    )
+        [Straight(length)], start=start, rail_centre_distance=rail_centre_distance,
+        rails=rails)

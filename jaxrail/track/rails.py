@@ -3,9 +3,9 @@
 A rail's profile origin and frame at arc length ``s`` are made of
 
 1. the design track's frame ``[t n b]`` at ``s`` (:func:`jaxrail.track.track_frame`);
-2. the rail's lateral offset from the track centre along ``n``, ``side * rail_offset``
-   (``rail_offset`` from the rail profile and the gauge,
-   :func:`jaxrail.profiles.rail_offset`);
+2. the rail's lateral offset from the track centre along ``n``, ``side *
+   track.rails.offset`` (:class:`Rails`: the rails' profile and the offset that sets the
+   gauge, :func:`jaxrail.profiles.rail_offset`);
 3. the track's irregularity, when it has one (:attr:`Track.irregularity`,
    :mod:`jaxrail.track.irregularity`): the rail moved by ``y = a + side g / 2`` along
    ``n`` and ``z = v + side c / 2`` along ``b``;
@@ -21,13 +21,57 @@ is the taping point's plane, :data:`HALF_TAPING_DISTANCE` from the wheelset cent
 (:func:`wheel_origin`).
 """
 
+import functools
+
+import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from ..profiles import Profile, gauge_point, rail_offset, uic60
 from .geometry import _side_sign, centreline_position, track_frame
 from .projection import project
 
 HALF_TAPING_DISTANCE = 0.75  # [m] taping lines 1500 mm apart (back-to-back 1360 mm)
+STANDARD_GAUGE = 1.435  # [m]
+STANDARD_INCLINATION = "1:40"  # of the standard UIC60 rail
+
+
+class Rails(eqx.Module):
+    """The track's two rails: their cross-section and where they stand (traced: changing
+    them never recompiles, and both can be batched or differentiated).
+
+    Fields:
+        profile: the rail :class:`~jaxrail.profiles.Profile` of both rails, lateral
+            coordinate toward the field side; the right rail's is its mirror image.
+        offset: distance [m] from the track centre to each rail's profile origin along
+            the canted track frame's ``n`` (float64 scalar), which sets the gauge
+            (:func:`jaxrail.profiles.rail_offset`; 0.75303 m for UIC60 1:40 at 1.435 m).
+    """
+
+    profile: Profile
+    offset: Float[Array, ""] = eqx.field(converter=lambda x: jnp.asarray(x, jnp.float64))
+
+    @classmethod
+    def at_gauge(cls, profile: Profile, gauge: Float[ArrayLike, ""] = STANDARD_GAUGE
+                 ) -> "Rails":
+        """Rails of ``profile`` whose gauge points (14 mm below the rail tops) are
+        ``gauge`` [m] apart."""
+        return cls(profile, rail_offset(profile, gauge))
+
+    @property
+    def gauge(self) -> Float[Array, ""]:
+        """Distance [m] between the rails' gauge points, 14 mm below their tops."""
+        return 2.0 * (self.offset + gauge_point(self.profile))
+
+
+@functools.cache
+def standard_rails() -> Rails:
+    """UIC60 inclined 1:40 at standard gauge (1.435 m): the rails of every track unless
+    it is given others (:meth:`jaxrail.track.Track.with_rails`). Computed once, eagerly
+    (also when first asked for inside a trace)."""
+    with jax.ensure_compile_time_eval():
+        return Rails.at_gauge(uic60(STANDARD_INCLINATION), STANDARD_GAUGE)
 
 
 def wheel_origin(wheelset_position, wheelset_rotation, side) -> Float[Array, "3"]:
@@ -54,32 +98,30 @@ def rail_displacement(track, s, side, deflection=None
 
 
 def rail_frame(
-    track, s: Float[ArrayLike, ""], side, lateral_offset: Float[ArrayLike, ""],
-    deflection: Float[ArrayLike, "2"] | None = None,
+    track, s: Float[ArrayLike, ""], side, deflection: Float[ArrayLike, "2"] | None = None,
 ) -> tuple[Float[Array, "3"], Float[Array, "3 3"]]:
     """Rail profile origin and orientation at ``s`` (paper eq. 1).
 
     **Arguments:**
-        track: the track (design layout and, optionally, its irregularity).
+        track: the track (design layout, its :class:`Rails` and, optionally, its
+            irregularity).
         s: arc length along the centreline [m].
         side: ``+1`` or ``"left"`` for the left rail, ``-1`` or ``"right"`` for the right
             (a traced array of +-1 is accepted for vmapping over both rails).
-        lateral_offset: distance [m] from the track centre to the rail profile origin,
-            measured along the canted ``n`` (e.g. about 0.75303 m for UIC60 1:40 at
-            gauge 1435 mm).
         deflection: on a flexible track, this rail's (lateral, vertical) deflection
             (2,) [m] under the wheelset being evaluated; None: a rigid rail.
 
-    **Returns:** ``(origin, A)``: ``origin = centreline + (side * lateral_offset + y) n
-    + z b`` [m], global frame, shape ``(3,)``, with ``(y, z)`` the irregularity's
-    displacement of this rail plus its deflection (:func:`rail_displacement`);
-    ``A = [t n b]`` ``(3, 3)``, the design track frame, the same for both rails (the
-    right rail's field-side mirroring is applied to profile coordinates by
-    :func:`jaxrail.track.rail_point` and by the contact search via ``side``).
+    **Returns:** ``(origin, A)``: ``origin = centreline + (side * offset + y) n + z b``
+    [m], global frame, shape ``(3,)``, with ``offset`` the rails' (:attr:`Rails.offset`,
+    along the canted ``n``) and ``(y, z)`` the irregularity's displacement of this rail
+    plus its deflection (:func:`rail_displacement`); ``A = [t n b]`` ``(3, 3)``, the
+    design track frame, the same for both rails (the right rail's field-side mirroring
+    is applied to profile coordinates by :func:`jaxrail.track.rail_point` and by the
+    contact search via ``side``).
     """
     sign = _side_sign(side)
     frame = track_frame(track, s)
-    offset = jnp.asarray(lateral_offset, dtype=jnp.float64)
+    offset = track.rails.offset
     lateral, vertical = rail_displacement(track, s, sign, deflection)
     origin = (centreline_position(track, s) + (sign * offset + lateral) * frame[:, 1]
               + vertical * frame[:, 2])
@@ -90,7 +132,6 @@ def rail_point(
     track,
     s: Float[ArrayLike, ""],
     side,
-    lateral_offset: Float[ArrayLike, ""],
     u: Float[ArrayLike, ""],
     f: Float[ArrayLike, ""],
     dx: Float[ArrayLike, ""] = 0.0,
@@ -108,7 +149,7 @@ def rail_point(
         dx: longitudinal offset [m] along ``t`` (the rail is locally straight).
     """
     sign = _side_sign(side)
-    origin, frame = rail_frame(track, s, sign, lateral_offset, deflection)
+    origin, frame = rail_frame(track, s, sign, deflection)
     local = jnp.stack(
         [
             jnp.asarray(dx, dtype=jnp.float64),
@@ -119,7 +160,7 @@ def rail_point(
     return origin + frame @ local
 
 
-def rail_under_wheel(track, rail_offset, origin, side, s_guess=None, deflection=None):
+def rail_under_wheel(track, origin, side, s_guess=None, deflection=None):
     """The rail section under a wheel whose profile origin is ``origin`` (3,) [m]
     (:func:`wheel_origin`): ``(s_rail, rail_origin (3,), rail_axes (3, 3))``, the
     section's arc length [m] (eqs. 3-5: the design centreline's normal plane through
@@ -127,26 +168,25 @@ def rail_under_wheel(track, rail_offset, origin, side, s_guess=None, deflection=
     its irregularity and, on a flexible track, by ``deflection`` (2,) [m] (lateral,
     vertical) under this wheel."""
     s_rail = project(track, origin, s_guess)
-    rail_origin, rail_axes = rail_frame(track, s_rail, side, rail_offset, deflection)
+    rail_origin, rail_axes = rail_frame(track, s_rail, side, deflection)
     return s_rail, rail_origin, rail_axes
 
 
-def lateral_from_centre(track, rail_offset, s, side, y_rail, deflection=None):
+def lateral_from_centre(track, s, side, y_rail, deflection=None):
     """Lateral position [m] from the design track centre (along the canted ``n``,
     positive left) of the point ``y_rail`` [m] (toward the field side) of the ``side``
     rail's profile at ``s`` [m], with the rail's irregularity and ``deflection`` (2,)
     [m] (:func:`rail_displacement`)."""
-    return side * (rail_offset + y_rail) + rail_displacement(track, s, side, deflection)[0]
+    return (side * (track.rails.offset + y_rail)
+            + rail_displacement(track, s, side, deflection)[0])
 
 
-def wheel_height(track, rail_offset, wheelset_position, wheelset_rotation, side,
-                 deflection=None):
+def wheel_height(track, wheelset_position, wheelset_rotation, side, deflection=None):
     """Height [m] of the ``side`` wheel's profile origin (:func:`wheel_origin`) over its
     rail's profile origin, along the rail's ``b`` (:func:`rail_under_wheel`: with the
     rail's irregularity and ``deflection`` (2,) [m])."""
     origin = wheel_origin(wheelset_position, wheelset_rotation, side)
-    _, rail_origin, rail_axes = rail_under_wheel(track, rail_offset, origin, side,
-                                                 deflection=deflection)
+    _, rail_origin, rail_axes = rail_under_wheel(track, origin, side, deflection=deflection)
     return (origin - rail_origin) @ rail_axes[:, 2]
 
 
