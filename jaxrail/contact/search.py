@@ -218,28 +218,27 @@ def _contact_data(surface, surface_index, wheel, rail, point, y, active, depth, 
     )
 
 
-def _wheel_geometry(track, rail_offset, wheelset_position, wheelset_rotation, side, s_guess,
+def _wheel_geometry(track, wheelset_position, wheelset_rotation, side, s_guess,
                     deflection=None):
     """Wheel origin, wheel frame and rail section of one wheel (eqs. 3-7), the rail
     from :mod:`jaxrail.track.rails`."""
     origin = wheel_origin(wheelset_position, wheelset_rotation, side)
-    s_rail, rail_origin, rail_axes = rail_under_wheel(track, rail_offset, origin, side, s_guess,
-                                                      deflection)
+    s_rail, rail_origin, rail_axes = rail_under_wheel(track, origin, side, s_guess, deflection)
     frame = wheel_frame(wheelset_rotation[:, 1], rail_axes[:, 0])
     return s_rail, (origin, frame, rail_origin, rail_axes, side)
 
 
-def search_wheel(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelset_position,
-                 wheelset_rotation, side, config: SearchConfig = SearchConfig(),
-                 s_guess=None, deflection=None) -> ContactPatches:
+def search_wheel(wheel: WheelProfile, track, wheelset_position, wheelset_rotation, side,
+                 config: SearchConfig = SearchConfig(), s_guess=None,
+                 deflection=None) -> ContactPatches:
     """Contact patches between one wheel and its rail.
 
     Arguments:
-        wheel, rail: wheel and rail profiles (the same profiles serve both sides).
-        track: a :class:`jaxrail.track.Track` (with its irregularity, if any: the wheel
-            meets the rail where :mod:`jaxrail.track.rails` puts it).
-        rail_offset: distance from the track centre to the rail profile origin [m]
-            (:func:`jaxrail.profiles.rail_offset`).
+        wheel: the wheel profile (the same profile serves both sides).
+        track: a :class:`jaxrail.track.Track`: its rails (:class:`jaxrail.track.Rails`,
+            one profile for both, at their offset from the track centre) and its
+            irregularity, if any (the wheel meets the rail where
+            :mod:`jaxrail.track.rails` puts it).
         wheelset_position: wheelset centre, global, shape (3,) [m].
         wheelset_rotation: wheelset orientation, shape (3, 3), columns = body axes
             (forward, axle to the left, up) in global components.
@@ -251,19 +250,20 @@ def search_wheel(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelse
 
     Returns :class:`ContactPatches` with leading shape ``(P,)``.
     """
-    return search_wheel_parts(wheel, rail, track, rail_offset, wheelset_position,
-                              wheelset_rotation, side, config, s_guess, deflection)[0]
+    return search_wheel_parts(wheel, track, wheelset_position, wheelset_rotation, side,
+                              config, s_guess, deflection)[0]
 
 
-def search_wheel_parts(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelset_position,
-                       wheelset_rotation, side, config: SearchConfig = SearchConfig(),
-                       s_guess=None, deflection=None) -> tuple[ContactPatches, dict]:
+def search_wheel_parts(wheel: WheelProfile, track, wheelset_position, wheelset_rotation, side,
+                       config: SearchConfig = SearchConfig(), s_guess=None,
+                       deflection=None) -> tuple[ContactPatches, dict]:
     """:func:`search_wheel` and the parts each patch's contact point is made of (:data:`PARTS`,
     each (P,) [m]): the refined deepest point, the centre of the interpenetration and its
     breadth, from which :func:`jaxrail.contact.patches.wide_point` places the point."""
     side = jnp.asarray(side, dtype=jnp.float64)
-    s_rail, geometry = _wheel_geometry(track, rail_offset, wheelset_position, wheelset_rotation,
-                                       side, s_guess, deflection)
+    rail = track.rails.profile
+    s_rail, geometry = _wheel_geometry(track, wheelset_position, wheelset_rotation, side,
+                                       s_guess, deflection)
     slots = config.slots(wheel)
     parts = [_surface_patches(s, k, wheel, rail, geometry, config, config.max_patches)
              for k, s in enumerate(wheel.surfaces)]
@@ -271,46 +271,44 @@ def search_wheel_parts(wheel: WheelProfile, rail: Profile, track, rail_offset, w
     located = {key: data.pop(key) for key in PARTS}
     data["surface"] = data["surface"].astype(jnp.int32)
     data["s_rail"] = jnp.full((slots,), s_rail)
-    data["y_track"] = lateral_from_centre(track, rail_offset, s_rail, side, data["y_rail"],
-                                          deflection)
+    data["y_track"] = lateral_from_centre(track, s_rail, side, data["y_rail"], deflection)
     return ContactPatches(**data), located
 
 
 @traced_once
-def deepest_depth(wheel: WheelProfile, rail: Profile, track, rail_offset, wheelset_position,
-                  wheelset_rotation, side, config: SearchConfig = SearchConfig(), s_guess=None,
-                  deflection=None):
+def deepest_depth(wheel: WheelProfile, track, wheelset_position, wheelset_rotation, side,
+                  config: SearchConfig = SearchConfig(), s_guess=None, deflection=None):
     """Largest signed depth [m] of a wheel into its rail over all strips and surfaces,
     refined below the strip spacing (negative: the wheel is clear of the rail by that
     normal distance). Used to put a wheelset on the rails (quasi-static geometry)."""
     side = jnp.asarray(side, dtype=jnp.float64)
-    _, geometry = _wheel_geometry(track, rail_offset, wheelset_position, wheelset_rotation,
-                                  side, s_guess, deflection)
-    depths = [_surface_deepest(s, wheel, rail, geometry, config)[0] for s in wheel.surfaces]
+    _, geometry = _wheel_geometry(track, wheelset_position, wheelset_rotation, side, s_guess,
+                                  deflection)
+    depths = [_surface_deepest(s, wheel, track.rails.profile, geometry, config)[0]
+              for s in wheel.surfaces]
     return jnp.max(jnp.stack(depths))
 
 
 @traced_once
-def search_wheelset(wheel, rail, track, rail_offset, wheelset_position, wheelset_rotation,
+def search_wheelset(wheel, track, wheelset_position, wheelset_rotation,
                     config: SearchConfig = SearchConfig(), s_guess=None,
                     deflection=None) -> ContactPatches:
     """Both wheels of a wheelset; leading shape ``(2, P)`` ordered (left, right).
     ``deflection``: on a flexible track, the rails' deflections (2, 2) [m] under this
     wheelset (left, right; lateral, vertical); None: rigid rails."""
     sides = jnp.array([1.0, -1.0])
-    return jax.vmap(lambda side, d: search_wheel(wheel, rail, track, rail_offset,
-                                                 wheelset_position, wheelset_rotation, side,
-                                                 config, s_guess, d),
+    return jax.vmap(lambda side, d: search_wheel(wheel, track, wheelset_position,
+                                                 wheelset_rotation, side, config, s_guess, d),
                     in_axes=(0, None if deflection is None else 0))(sides, deflection)
 
 
-def search_vehicle(wheel, rail, track, rail_offset, wheelset_positions, wheelset_rotations,
+def search_vehicle(wheel, track, wheelset_positions, wheelset_rotations,
                    config: SearchConfig = SearchConfig(), s_guesses=None,
                    deflections=None) -> ContactPatches:
     """All wheels of a vehicle in one call: positions ``(W, 3)``, rotations ``(W, 3, 3)``,
     optional arc-length guesses ``(W,)`` and, on a flexible track, the rails'
     deflections ``(W, 2, 2)`` [m]; leading shape ``(W, 2, P)``."""
     return jax.vmap(
-        lambda p, r, s, d: search_wheelset(wheel, rail, track, rail_offset, p, r, config, s, d),
+        lambda p, r, s, d: search_wheelset(wheel, track, p, r, config, s, d),
         in_axes=(0, 0, None if s_guesses is None else 0, None if deflections is None else 0),
     )(wheelset_positions, wheelset_rotations, s_guesses, deflections)

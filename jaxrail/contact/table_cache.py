@@ -2,8 +2,9 @@
 
 The cache folder is ``$JAXRAIL_CACHE_DIR/tables`` when that variable is set, else
 ``~/.cache/jaxrail/tables``. A table file (``<key>.npz``) holds the values and a JSON
-description (profiles, grid, build time); the key hashes the wheel and rail profiles
-(every array and static field), the rail offset, the search settings, the grid and
+description (profiles, grid, build time); the key hashes the wheel profile and the
+rails' (:class:`jaxrail.track.Rails`: every array and static field of the profiles), the
+rails' offset, the search settings, the grid and
 :data:`TABLE_VERSION`, so any change to them builds a new table. Files are written
 whole or not at all.
 """
@@ -37,27 +38,29 @@ def _hash_pytree(digest, tree):
         digest.update(np.ascontiguousarray(array).tobytes())
 
 
-def table_key(wheel, rail, rail_offset, config: SearchConfig, grid: TableGrid) -> str:
-    """Hex key of a table: a hash of everything it depends on."""
+def table_key(wheel, rails, config: SearchConfig, grid: TableGrid) -> str:
+    """Hex key of a table: a hash of everything it depends on (the rails' profile and
+    offset hashed apart, in the order of the keys before the rails were the track's, so
+    that the tables cached then are found)."""
     digest = hashlib.sha256()
     digest.update(f"jaxrail contact table v{TABLE_VERSION} {FIELDS}".encode())
-    for part in (wheel, rail, config, grid):
+    for part in (wheel, rails.profile, config, grid):
         _hash_pytree(digest, part)
-    digest.update(repr(float(rail_offset)).encode())
+    digest.update(repr(float(rails.offset)).encode())
     return digest.hexdigest()[:24]
 
 
-def table_path(wheel, rail, rail_offset, config=SearchConfig(), grid=TableGrid()) -> Path:
+def table_path(wheel, rails, config=SearchConfig(), grid=TableGrid()) -> Path:
     """Where the table of these inputs is (or would be) cached."""
-    return cache_folder() / f"{table_key(wheel, rail, rail_offset, config, grid)}.npz"
+    return cache_folder() / f"{table_key(wheel, rails, config, grid)}.npz"
 
 
-def _describe(wheel, rail, rail_offset, config, grid, build_time):
+def _describe(wheel, rails, config, grid, build_time):
     axes = {name: {"start": axis.start, "step": axis.step, "count": axis.count}
             for name, axis in (("lateral_m", grid.lateral), ("yaw_rad", grid.yaw),
                                ("roll_rad", grid.roll), ("approach_m", grid.approach))}
     return {"version": TABLE_VERSION, "wheel": type(wheel).__name__,
-            "rail": type(rail).__name__, "rail_offset_m": float(rail_offset),
+            "rail": type(rails.profile).__name__, "rail_offset_m": float(rails.offset),
             "strip_spacing_m": config.strip_spacing, "max_patches": config.max_patches,
             "grid": axes, "fields": list(FIELDS), "build_time_s": round(build_time, 2)}
 
@@ -80,15 +83,16 @@ def load_table(path) -> tuple[ContactTable, dict]:
     return ContactTable(jax.numpy.asarray(values), grid, surfaces, radius), info
 
 
-def contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchConfig(),
+def contact_table(wheel, rails, config: SearchConfig = SearchConfig(),
                   grid: TableGrid = TableGrid(), progress: bool = False,
                   cache: bool = True) -> tuple[ContactTable, dict]:
-    """The contact table of a wheel and rail profile pair: from the cache, or built with
+    """The contact table of a wheel profile on ``rails`` (:class:`jaxrail.track.Rails`,
+    e.g. a track's ``track.rails``): from the cache, or built with
     the paper's search (:func:`jaxrail.contact.table.build_contact_table`) and cached.
     ``progress``: show a progress bar while building. Returns ``(table, description)``
     (the description has the build time and ``"path"``; ``"cached"`` says whether it
     was read from the cache)."""
-    path = table_path(wheel, rail, rail_offset, config, grid)
+    path = table_path(wheel, rails, config, grid)
     if cache and path.exists():
         table, info = load_table(path)
         return table, {**info, "path": str(path), "cached": True}
@@ -103,12 +107,12 @@ def contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchConfig(
         bar.refresh()
 
     start = time.perf_counter()
-    table, diagnostics = build_contact_table(wheel, rail, rail_offset, config, grid,
+    table, diagnostics = build_contact_table(wheel, rails, config, grid,
                                              progress=report if bar is not None else None)
     build_time = time.perf_counter() - start
     if bar is not None:
         bar.close()
-    info = _describe(wheel, rail, rail_offset, config, grid, build_time) | diagnostics
+    info = _describe(wheel, rails, config, grid, build_time) | diagnostics
     if cache:
         path.parent.mkdir(parents=True, exist_ok=True)
 

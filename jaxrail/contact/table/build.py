@@ -7,7 +7,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ...track import rail_frame, straight_track
+from ...track import Rails, rail_frame, straight_track
 from ...track.rails import HALF_TAPING_DISTANCE
 from ..search import SearchConfig, deepest_depth, search_wheel_parts
 from ..strip import wheel_frame
@@ -20,10 +20,10 @@ _LEVEL_TOLERANCE = 1.0e-7  # [m] on the deepest depth at each approach level (re
 FIRST_STEPS, NEXT_STEPS = 24, 10  # Newton steps to the first approach level, to each next
 
 
-def _pose_on_straight(track, rail_offset, radius, lateral, vertical, yaw, roll, side):
+def _pose_on_straight(track, radius, lateral, vertical, yaw, roll, side):
     """Wheelset pose on a straight level ``track`` at s = 50 m whose ``side`` wheel has
     this relative pose."""
-    rail_origin, rail_axes = rail_frame(track, 50.0, side, rail_offset)
+    rail_origin, rail_axes = rail_frame(track, 50.0, side)
     cy, sy, cr, sr = jnp.cos(yaw), jnp.sin(yaw), jnp.cos(roll), jnp.sin(roll)
     rotation_local = jnp.array([[cy, -sy * cr, sy * sr], [sy, cy * cr, -cy * sr],
                                 [0.0, sr, cr]])  # Rz(yaw) Rx(roll)
@@ -36,21 +36,22 @@ def _pose_on_straight(track, rail_offset, radius, lateral, vertical, yaw, roll, 
 
 def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, levels):
     """The search at one node (lateral [m], yaw [rad], roll [rad]) of the ``side`` rail
-    with the wheel lowered until its deepest patch penetrates each of the ``levels`` [m].
+    (profile ``rail`` at ``rail_offset`` [m], a float: a constant of the program) with
+    the wheel lowered until its deepest patch penetrates each of the ``levels`` [m].
 
     Returns ``(found (L, P), values (L, P, len(FIELDS) + 1), depth (L, P), heights (L,),
     miss)``: the slots holding a patch, their fields and contact point (``_WHERE``),
     their signed depths, the wheel's
     vertical position [m] at each level, and the largest error [m] of the deepest depth
     against its level."""
-    track = straight_track(100.0)
+    track = straight_track(100.0, rails=Rails(rail, rail_offset))
     first_strip = jnp.stack([config.strip_grid(surface)[0] for surface in wheel.surfaces])
 
     def pose(vertical):
-        return _pose_on_straight(track, rail_offset, radius, lateral, vertical, yaw, roll, side)
+        return _pose_on_straight(track, radius, lateral, vertical, yaw, roll, side)
 
     def residual(z, depth):
-        return deepest_depth(wheel, rail, track, rail_offset, *pose(z), side, config) - depth
+        return deepest_depth(wheel, track, *pose(z), side, config) - depth
 
     depths = jnp.asarray(levels)
     passes = _height_passes(len(levels))
@@ -79,7 +80,7 @@ def _node(wheel, rail, rail_offset, lateral, yaw, roll, side, config, radius, le
                 jnp.where(record, f, misses)), None
 
     def slots(z):
-        patches, parts = search_wheel_parts(wheel, rail, track, rail_offset, *pose(z), side, config)
+        patches, parts = search_wheel_parts(wheel, track, *pose(z), side, config)
         geometric = jnp.einsum("pi,pi->p", patches.rail_point - patches.wheel_point, patches.normal)
         named = dict(parts, rail_from_wheel=patches.y_rail - patches.y_wheel,
                      curvature_contact_y=patches.curvature_contact_y)
@@ -157,10 +158,11 @@ def _search_side(wheel, rail, rail_offset, config, grid, side, chunk, progress):
     return tuple(np.concatenate(x).reshape(shape + np.shape(x[0])[1:]) for x in zip(*parts))
 
 
-def build_contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchConfig(),
+def build_contact_table(wheel, rails: Rails, config: SearchConfig = SearchConfig(),
                         grid: TableGrid = TableGrid(), chunk: int = 256,
                         progress=None) -> tuple[ContactTable, dict]:
-    """Run the paper's search at every node of ``grid`` for both rails.
+    """Run the paper's search at every node of ``grid`` for both rails of ``rails``
+    (:class:`jaxrail.track.Rails`), on a straight track.
 
     Returns the table and diagnostics: ``nodes``, and ``level_misses``, the nodes where
     the deepest depth could not be brought within 0.1 um of an approach level (the
@@ -169,7 +171,7 @@ def build_contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchC
     search's data at the height reached.
 
     Arguments:
-        wheel, rail, rail_offset, config: as :func:`jaxrail.contact.search_wheel`.
+        wheel, config: as :func:`jaxrail.contact.search_wheel`.
         grid: the :class:`TableGrid`.
         chunk: nodes per compiled batch.
         progress: optional callable ``(done, total)`` for a progress bar.
@@ -181,8 +183,8 @@ def build_contact_table(wheel, rail, rail_offset, config: SearchConfig = SearchC
     sides = []
     for n, side in enumerate((1.0, -1.0)):
         report = None if progress is None else (lambda done: progress(n * count + done, total))
-        found, values, depth, heights, miss = _search_side(wheel, rail, rail_offset, config, grid,
-                                                           side, chunk, report)
+        found, values, depth, heights, miss = _search_side(wheel, rails.profile, rails.offset,
+                                                           config, grid, side, chunk, report)
         worst_miss = max(worst_miss, float(np.max(miss)))
         misses += int(np.sum(miss > _LEVEL_TOLERANCE))
         tracked = _limit_rates(_assign_slots(found, values, depth, heights, surfaces)[..., :_WHERE],

@@ -15,8 +15,7 @@ from .grid import _RATES, _VALUES, FIELDS, GEOMETRY, ContactTable
 from .spline import _pose_weights
 
 
-def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotation, side,
-                  deflection=None):
+def relative_pose(track, radius, wheelset_position, wheelset_rotation, side, deflection=None):
     """Pose of one wheel relative to its rail (module docstring), the rail moved by
     ``deflection`` (2,) [m] on a flexible track (:func:`jaxrail.track.rail_under_wheel`).
 
@@ -26,7 +25,7 @@ def relative_pose(track, rail_offset, radius, wheelset_position, wheelset_rotati
     :class:`~jaxrail.contact.strip.WheelFrame`."""
     axle = wheelset_rotation[:, 1]
     origin = wheel_origin(wheelset_position, wheelset_rotation, side)
-    s_rail, rail_origin, rail_axes = rail_under_wheel(track, rail_offset, origin, side,
+    s_rail, rail_origin, rail_axes = rail_under_wheel(track, origin, side,
                                                       deflection=deflection)
     frame = wheel_frame(axle, rail_axes[:, 0])
     taping = origin - radius * frame.up - rail_origin
@@ -72,17 +71,18 @@ def _along_levels(heights, fields, vertical, levels):
 
 
 @traced_once
-def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset_position,
-                  wheelset_rotation, side, deflection=None) -> ContactPatches:
-    """Contact patches of one wheel from ``table`` instead of the search: the same
+def table_patches(table: ContactTable, wheel, track, wheelset_position, wheelset_rotation, side,
+                  deflection=None) -> ContactPatches:
+    """Contact patches of one wheel on ``track``'s rails from ``table`` (built for that wheel
+    and those rails) instead of the search: the same
     :class:`ContactPatches` as :func:`jaxrail.contact.search_wheel` (leading shape
     ``(P,)``), each patch's penetration interpolated between the approach levels in the
     wheel's vertical position (:func:`_along_levels`). ``deflection``: as
     :func:`~jaxrail.contact.search_wheel`'s."""
     side = jnp.asarray(side, dtype=jnp.float64)
     (lateral, vertical, yaw, roll, s_rail, rail_origin, rail_axes, origin,
-     frame) = relative_pose(track, rail_offset, table.radius, wheelset_position,
-                            wheelset_rotation, side, deflection)
+     frame) = relative_pose(track, table.radius, wheelset_position, wheelset_rotation, side,
+                            deflection)
     side_index = jnp.where(side > 0.0, 0, 1).astype(jnp.int32)
     slots, count = len(table.surfaces), table.shape[4]
     nodes, weight = _pose_weights(table, side_index, lateral, yaw, roll)
@@ -109,8 +109,8 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
                                              side)
         dx = (point - rail_origin) @ rail_axes[:, 0]
         return dict(wheel_point=point, s_wheel=s_wheel, dx=dx,
-                    **contact_geometry(surface, rail, wheel.nominal_radius, yw, yr, dx,
-                                       rail_origin, rail_axes, side))
+                    **contact_geometry(surface, track.rails.profile, wheel.nominal_radius, yw,
+                                       yr, dx, rail_origin, rail_axes, side))
 
     parts = []
     for k, surface in enumerate(wheel.surfaces):  # each surface's slots (contiguous)
@@ -125,7 +125,7 @@ def table_patches(table: ContactTable, wheel, rail, track, rail_offset, wheelset
         y_wheel=y_wheel,
         y_rail=y_rail,
         s_rail=jnp.full(y_wheel.shape, s_rail),
-        y_track=lateral_from_centre(track, rail_offset, s_rail, side, y_rail, deflection),
+        y_track=lateral_from_centre(track, s_rail, side, y_rail, deflection),
         curvature_contact_y=curvature,
         **geometry,
     )
