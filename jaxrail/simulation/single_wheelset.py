@@ -10,12 +10,12 @@ from .options import SolverOptions
 from .run import simulate
 
 
-def simulate_single_wheelset(wheel, rail, track, rail_offset, speed, lateral, t1,
+def simulate_single_wheelset(wheel, track, speed, lateral, t1,
                              n_outputs=201, contact=None, s0=10.0,
                              config=SearchConfig(), rtol=1e-6, atol=1e-9, max_steps=400_000,
                              contact_model=None, integrator="tsit5", progress=False):
-    """Roll a free wheelset along the track from arc length ``s0`` [m] with
-    :func:`jaxrail.simulation.simulate`.
+    """Roll a free wheelset of ``wheel`` profile along ``track`` (on its rails) from arc
+    length ``s0`` [m] with :func:`jaxrail.simulation.simulate`.
 
     It starts at the touching height, shifted by ``lateral`` [m] (positive left), moving
     at ``speed`` [m/s] and spinning at ``speed / rolling radius`` of the centred contact,
@@ -26,8 +26,8 @@ def simulate_single_wheelset(wheel, rail, track, rail_offset, speed, lateral, t1
     patches.
     """
     contact = ContactParameters() if contact is None else contact
-    height, patches = touching_height(wheel, rail, track, rail_offset, s0, config)
-    vehicle, params = single_wheelset(wheel, rail, contact, config, rail_offset)
+    height, patches = touching_height(wheel, track, s0, config)
+    vehicle, params = single_wheelset(wheel, contact, config)
     position, rotation = wheelset_pose(track, s0, lateral, height)
     q0 = join_coordinates(position[None, :], quaternion.from_rotation_matrix(rotation)[None, :])
     radius = patches.rolling_radius[0, 0]

@@ -32,12 +32,13 @@ from .parameters import PARAMETERS as PARAMETERS
 from .parameters import get_values as get_values
 from .parameters import parameter as parameter
 from .parameters import set_values as set_values
+from .parameters import set_values_and_track as set_values_and_track
 
 __all__ = ["bogie", "contact_loads", "contact_model", "CONTACT_MODELS",
            "ContactParameters", "get_values", "initial_state", "OnlineContact",
            "parameter", "PARAMETERS", "patch_loads", "PatchForces",
-           "read_vehicle_data", "set_values", "single_wheelset", "static_loads",
-           "TableContact", "touching_height",
+           "read_vehicle_data", "set_values", "set_values_and_track", "single_wheelset",
+           "static_loads", "TableContact", "touching_height",
            "trailer", "trailer_values", "Vehicle", "vehicle_accelerations",
            "vehicle_from_data", "vehicle_from_file", "vehicle_names",
            "VehicleLoads", "VehicleParams", "wheelset_contact_loads", "wheelset_loads",

@@ -18,8 +18,7 @@ import numpy as np
 from .._constants import GRAVITY
 from ..contact.search import SearchConfig
 from ..multibody import RigidBody, build_system
-from ..profiles import rail_offset as profile_rail_offset
-from ..profiles import s1002, uic60
+from ..profiles import s1002
 from .trailer import primary_bushings, trailer_values, unsprung_bodies
 from .vehicle import Vehicle, VehicleParams
 from .wheel_rail import ContactParameters
@@ -32,7 +31,7 @@ def bogie_frame_mass(values: dict) -> float:
     return values["bogie.mass"] + 0.5 * values["carbody.mass"]
 
 
-def bogie(wheel=None, rail=None, values=None, config=SearchConfig(),
+def bogie(wheel=None, values=None, config=SearchConfig(),
           contact=None) -> tuple[Vehicle, VehicleParams]:
     """The loaded bogie as ``(Vehicle, VehicleParams)``; arguments as
     :func:`jaxrail.vehicles.trailer`. Force elements ``primary_k_left``/``_right``
@@ -40,7 +39,6 @@ def bogie(wheel=None, rail=None, values=None, config=SearchConfig(),
     v = trailer_values() if values is None else values
     r0 = v["wheelset.nominal_radius"]
     wheel = s1002(nominal_radius=r0) if wheel is None else wheel
-    rail = uic60("1:40") if rail is None else rail
     b = v["bogie.semi_wheelbase"]
     added = 0.5 * v["carbody.mass"] * CARBODY_GYRATION_RADIUS**2
     inertia = tuple(v[f"bogie.{n}"] + added for n in ("roll_inertia", "pitch_inertia",
@@ -56,5 +54,4 @@ def bogie(wheel=None, rail=None, values=None, config=SearchConfig(),
     vehicle = Vehicle("bogie", system, (3, 4), config, axleboxes=(1, 2))
     return vehicle, VehicleParams(system_params,
                                   ContactParameters() if contact is None else contact,
-                                  wheel, rail, profile_rail_offset(rail),
-                                  np.array(layout + unsprung_layout))
+                                  wheel, np.array(layout + unsprung_layout))

@@ -18,17 +18,16 @@ from .._constants import GRAVITY
 from ..contact.search import SearchConfig
 from ..multibody import RigidBody, build_system
 from ..multibody import forces as fc
-from ..profiles import rail_offset
 from . import element_kinds as ek
 from .load_path import check_supported, static_loads
 from .quantities import check_dimension, file_error, read_number
 from .vehicle import Vehicle, VehicleParams
 from .vehicle_file import data_folder, read_vehicle_model
 from .wheel_rail import ContactParameters
-from .wheels import rail_profile, wheel_profile
+from .wheels import wheel_profile
 
-VEHICLE_KEYS = ("name", "description", "rail", "gauge", "gravity")
-DEFAULT_GAUGE = 1.435  # [m] standard gauge, when the file gives none
+VEHICLE_KEYS = ("name", "description", "gravity")
+TRACK_KEYS = ("rail", "gauge")  # the rails are the track's: a scenario's [track]
 
 
 def vehicle_names() -> list[str]:
@@ -70,14 +69,16 @@ def vehicle_from_file(path_or_name, **options) -> tuple[Vehicle, VehicleParams]:
 
 
 def vehicle_from_data(data: dict, where: str = "<data>", folder=None, *, wheel=None,
-                      rail=None, config: SearchConfig = SearchConfig(), contact=None,
+                      config: SearchConfig = SearchConfig(), contact=None,
                       parameters=None) -> tuple[Vehicle, VehicleParams]:
-    """``(Vehicle, VehicleParams)`` from a vehicle file's content as plain data.
+    """``(Vehicle, VehicleParams)`` from a vehicle file's content as plain data. The rail
+    profile and the gauge are the track's (:class:`jaxrail.track.Rails`, a scenario's
+    ``[track]``), not the vehicle's: a file that names them is refused.
 
     Arguments:
         data: the parsed TOML (nested dicts and lists).
         where: the name errors give for it; folder: where its profile files are.
-        wheel, rail: profiles replacing the file's; config: contact search settings;
+        wheel: the wheel profile replacing the file's; config: contact search settings;
             contact: :class:`ContactParameters` (default ones).
         parameters: ``{"group.name": value}`` in SI units, replacing the file's named
             parameters (everything that depends on them follows).
@@ -93,11 +94,6 @@ def vehicle_from_data(data: dict, where: str = "<data>", folder=None, *, wheel=N
             wheel = wheel_profile(profile, radius, b2b, folder)
         except ValueError as error:
             raise file_error(where, table, "profile", str(error)) from None
-    if rail is None:
-        try:
-            rail = rail_profile(settings["rail"], folder)
-        except ValueError as error:
-            raise file_error(where, "vehicle", "rail", str(error)) from None
     loads = static_loads(model, settings["gravity"])
     position = {b.name: b.position for b in model.bodies} | {"ground": (0.0, 0.0, 0.0)}
     joints = [_description(model, link, position) for link in model.joints]
@@ -113,34 +109,33 @@ def vehicle_from_data(data: dict, where: str = "<data>", folder=None, *, wheel=N
     layout = np.array([b.position for b in model.bodies])
     return vehicle, VehicleParams(system_params,
                                   ContactParameters() if contact is None else contact,
-                                  wheel, rail, rail_offset(rail, settings["gauge"]), layout)
+                                  wheel, layout)
 
 
 def _vehicle_table(model) -> dict:
     table = model.vehicle
     for key in table:
+        if key in TRACK_KEYS:
+            raise file_error(model.where, "vehicle", key, "the rail profile and the gauge "
+                             "belong to the track now: give them in the scenario's [track] "
+                             "(rail, inclination, gauge), or in Python to "
+                             "Track.with_rails(Rails.at_gauge(profile, gauge))")
         if key not in VEHICLE_KEYS:
             raise file_error(model.where, "vehicle", key, f"unknown key; known: "
                              f"{', '.join(VEHICLE_KEYS)}")
     name = table.get("name")
     if not isinstance(name, str) or not name.strip():
         raise file_error(model.where, "vehicle", "name", "missing: the vehicle's name")
-    if not isinstance(table.get("rail"), str):
-        raise file_error(model.where, "vehicle", "rail", "missing: the rail profile, e.g. "
-                         "'UIC60 1:40'")
-    settings = {"name": name, "rail": table["rail"]}
-    for key, unit, default in (("gauge", "m", DEFAULT_GAUGE), ("gravity", "m/s^2", GRAVITY)):
-        if key not in table:
-            settings[key] = default
-            continue
+    settings = {"name": name, "gravity": GRAVITY}
+    if "gravity" in table:
         try:
-            q = read_number(table[key], model.parameters)
-            check_dimension(q, unit)
+            q = read_number(table["gravity"], model.parameters)
+            check_dimension(q, "m/s^2")
             if isinstance(q, list) or not q.value > 0.0:
                 raise ValueError("must be one positive number")
         except ValueError as error:
-            raise file_error(model.where, "vehicle", key, str(error)) from None
-        settings[key] = q.value
+            raise file_error(model.where, "vehicle", "gravity", str(error)) from None
+        settings["gravity"] = q.value
     return settings
 
 

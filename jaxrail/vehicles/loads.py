@@ -46,13 +46,13 @@ class OnlineContact(eqx.Module):
         """Contact patches ``(2, P)`` of the wheelset at ``position`` (3,) [m] with
         body axes ``rotation`` (3, 3), global; ``deflection``: on a flexible track, the
         rails' deflections (2, 2) [m] under it (left, right; lateral, vertical)."""
-        return search_wheelset(params.wheel, params.rail, track, params.rail_offset,
-                               position, rotation, vehicle.config, deflection=deflection)
+        return search_wheelset(params.wheel, track, position, rotation, vehicle.config,
+                               deflection=deflection)
 
 
 class TableContact(eqx.Module):
     """Contact patches interpolated from a :class:`~jaxrail.contact.table.ContactTable`
-    of the vehicle's wheel and rail profiles (:func:`contact_model` builds or loads it).
+    of the vehicle's wheel on the track's rails (:func:`contact_model` builds or loads it).
 
     The table is data: it is traced, so a new table of the same grid does not
     recompile."""
@@ -67,20 +67,20 @@ class TableContact(eqx.Module):
         :meth:`OnlineContact.wheelset_patches`."""
         sides = jnp.array([1.0, -1.0])
         return jax.vmap(lambda side, d: table_patches(
-            self.table, params.wheel, params.rail, track, params.rail_offset, position,
-            rotation, side, d), in_axes=(0, None if deflection is None else 0))(
+            self.table, params.wheel, track, position, rotation, side, d),
+            in_axes=(0, None if deflection is None else 0))(
                 sides, deflection)
 
 
-def contact_model(name: str, vehicle: Vehicle, params: VehicleParams, progress: bool = False):
-    """The contact model called ``name`` (:data:`CONTACT_MODELS`) for the vehicle: the
-    paper's search, or the table of its profiles (from the cache, or built and cached
-    with a progress bar when ``progress``)."""
+def contact_model(name: str, vehicle: Vehicle, params: VehicleParams, track,
+                  progress: bool = False):
+    """The contact model called ``name`` (:data:`CONTACT_MODELS`) for the vehicle on
+    ``track``: the paper's search, or the table of its wheel on the track's rails (from
+    the cache, or built and cached with a progress bar when ``progress``)."""
     if name == "online":
         return OnlineContact()
     if name == "table":
-        table, _ = contact_table(params.wheel, params.rail, params.rail_offset,
-                                 vehicle.config, progress=progress)
+        table, _ = contact_table(params.wheel, track.rails, vehicle.config, progress=progress)
         return TableContact(table)
     raise ValueError(f"contact model must be one of {CONTACT_MODELS}, got {name!r}")
 

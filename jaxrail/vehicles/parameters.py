@@ -1,7 +1,9 @@
-"""Named scalar parameters of a vehicle that can be fitted or differentiated.
+"""Named scalar parameters of a vehicle and its track that can be fitted or differentiated.
 
-Each name reads and writes one number of :class:`jaxrail.vehicles.VehicleParams`
-(traced: writing it never recompiles). Contact: ``contact_stiffness`` (the factor on
+Each name reads and writes one number of :class:`jaxrail.vehicles.VehicleParams`, or of
+the :class:`jaxrail.track.Track` for ``track_gauge`` (traced: writing it never
+recompiles): :func:`get_values` reads both, :func:`set_values` writes the vehicle's and
+:func:`set_values_and_track` both. Contact: ``contact_stiffness`` (the factor on
 the Hertz stiffness, 1 = Hertz), ``friction`` [-], ``restitution`` (the normal law's
 c_e, eq. 17 and the damped Hertz laws). Suspension (every element of the family at
 once, per element): ``primary_longitudinal_stiffness``, ``primary_lateral_stiffness``,
@@ -9,7 +11,8 @@ once, per element): ``primary_longitudinal_stiffness``, ``primary_lateral_stiffn
 ``secondary_*`` ones (lateral and vertical damping too) for vehicles with a secondary
 suspension: older names of the bushings' element parameters
 (:mod:`jaxrail.vehicles.element_parameters`), ``primary_lateral_stiffness`` reading and
-writing ``primary.lateral_stiffness`` of the bushings of family ``primary``. Geometry: ``track_gauge`` [m] (moves both rails, keeping the profiles) and
+writing ``primary.lateral_stiffness`` of the bushings of family ``primary``. Geometry:
+``track_gauge`` [m] (the track's: moves both rails, keeping their profile) and
 ``wheelbase`` [m] (the axle spacing of each bogie: moves the axles with their axleboxes
 and the primary suspension's seats on the frame; masses and inertias stay).
 """
@@ -22,21 +25,24 @@ import jax.numpy as jnp
 
 from .._ranges import within
 from ..profiles.analytic import ConicalProfile
-from ..profiles.measures import gauge_point, rail_offset
+from ..track import Rails
 from .vehicle import Vehicle, VehicleParams
 
 
 @dataclasses.dataclass(frozen=True)
 class Parameter:
     """A named parameter: unit, meaning, how to read and write it, and the range
-    ``(low, high)`` of values accepted from users (draws, initial values, bounds)."""
+    ``(low, high)`` of values accepted from users (draws, initial values, bounds).
+    ``on``: ``"vehicle"`` (``get(vehicle, params)``, ``set(vehicle, params, value)`` ->
+    params) or ``"track"`` (``get(track)``, ``set(track, value)`` -> track)."""
 
     name: str
     unit: str
     description: str
-    get: Callable[[Vehicle, VehicleParams], object]
-    set: Callable[[Vehicle, VehicleParams, object], VehicleParams]
+    get: Callable[..., object]
+    set: Callable[..., object]
     range: tuple[float, float]
+    on: str = "vehicle"
 
     def check(self, value, where: str, key: str | None = None) -> float:
         """``value`` as a float if it is finite and within :attr:`range`, else
@@ -81,12 +87,8 @@ def _bushing_rows(vehicle, family):
     return jnp.asarray(_bushing_group(vehicle, family)[1])
 
 
-def _gauge_get(vehicle, params):
-    return 2.0 * (params.rail_offset + gauge_point(params.rail))
-
-
-def _gauge_set(vehicle, params, value):
-    return eqx.tree_at(lambda p: p.rail_offset, params, rail_offset(params.rail, value))
+def _gauge_set(track, value):
+    return track.with_rails(Rails.at_gauge(track.rails.profile, value))
 
 
 def _wheelbase_get(vehicle, params):
@@ -190,7 +192,8 @@ PARAMETERS = {p.name: p for p in [
       for family in ("primary", "secondary") for axis in _AXES],
     # track gauges from narrow (600 mm) to broad (1676 mm)
     Parameter("track_gauge", "m", "distance between the rails' gauge points, 14 mm below "
-              "their tops", _gauge_get, _gauge_set, (0.6, 1.7)),
+              "their tops", lambda track: track.rails.gauge, _gauge_set, (0.6, 1.7),
+              on="track"),
     Parameter("wheelbase", "m", "axle spacing of each bogie", _wheelbase_get,
               _wheelbase_set, (0.5, 5.0)),
     # the unsprung mass: each wheelset's weight adds to its wheel loads and to the rest
@@ -222,14 +225,36 @@ def parameter(name: str, vehicle=None, params=None) -> Parameter:
     return known[name]
 
 
-def get_values(vehicle, params, names) -> jnp.ndarray:
-    """Values (k,) of the named parameters."""
-    return jnp.stack([jnp.asarray(parameter(n, vehicle, params).get(vehicle, params))
-                      for n in names])
+def get_values(vehicle, params, names, track=None) -> jnp.ndarray:
+    """Values (k,) of the named parameters; ``track``: the track, needed for the
+    track's (``track_gauge``)."""
+    def value(name):
+        p = parameter(name, vehicle, params)
+        if p.on == "vehicle":
+            return p.get(vehicle, params)
+        if track is None:
+            raise ValueError(f"{name} is the track's: give get_values the track (track=)")
+        return p.get(track)
+    return jnp.stack([jnp.asarray(value(n)) for n in names])
 
 
 def set_values(vehicle, params, names, values) -> VehicleParams:
-    """``params`` with the named parameters set to ``values`` (k,) (traced)."""
+    """``params`` with the named parameters set to ``values`` (k,) (traced); ValueError
+    for a track's parameter (:func:`set_values_and_track` writes those)."""
+    for name in names:
+        if parameter(name, vehicle, params).on != "vehicle":
+            raise ValueError(f"{name} is the track's: set it with set_values_and_track("
+                             f"vehicle, params, track, names, values)")
+    return set_values_and_track(vehicle, params, None, names, values)[0]
+
+
+def set_values_and_track(vehicle, params, track, names, values):
+    """``(params, track)`` with the named parameters, the vehicle's and the track's
+    (``track_gauge``), set to ``values`` (k,) (traced)."""
     for k, name in enumerate(names):
-        params = parameter(name, vehicle, params).set(vehicle, params, values[k])
-    return params
+        p = parameter(name, vehicle, params)
+        if p.on == "vehicle":
+            params = p.set(vehicle, params, values[k])
+        else:
+            track = p.set(track, values[k])
+    return params, track

@@ -8,7 +8,7 @@ Manchester benchmark wheelset, 1813 kg [V-src]; inertias Ixx = Izz = 1120, Iyy =
 kg m^2 [R, recalled] (shared/reference/vehicle.md).
 
 The built-in vehicle file ``single-wheelset`` (``data/single-wheelset.toml``, what
-scenarios build) is :func:`single_wheelset` on S1002 / UIC60 1:40, number for number
+scenarios build) is :func:`single_wheelset` with S1002 wheels, number for number
 (tests/vehicles/test_vehicle_file.py).
 """
 
@@ -18,7 +18,6 @@ import jax.numpy as jnp
 from ..contact.pose import wheelset_pose
 from ..contact.search import SearchConfig, search_wheelset
 from ..multibody import RigidBody, build_system
-from ..profiles import rail_offset
 from .vehicle import Vehicle, VehicleParams
 from .wheel_rail import ContactParameters
 
@@ -26,11 +25,12 @@ WHEELSET_MASS = 1813.0  # [kg] Manchester benchmark [V-src]
 WHEELSET_INERTIA = (1120.0, 112.0, 1120.0)  # [kg m^2] (roll, spin, yaw) [R]
 
 
-def touching_height(wheel, rail, track, rail_offset, s, config=SearchConfig()):
+def touching_height(wheel, track, s, config=SearchConfig()):
     """Centre height [m] above the track plane at which a centred wheelset at arc length
-    ``s`` first touches the rails (bisection, 60 steps), and the contact patches there."""
-    search = jax.jit(lambda h: search_wheelset(wheel, rail, track, rail_offset,
-                                               *wheelset_pose(track, s, 0.0, h), config))
+    ``s`` first touches the track's rails (bisection, 60 steps), and the contact patches
+    there."""
+    search = jax.jit(lambda h: search_wheelset(wheel, track, *wheelset_pose(track, s, 0.0, h),
+                                               config))
     lo, hi = 0.5 * float(wheel.nominal_radius), 1.5 * float(wheel.nominal_radius)
     for _ in range(60):
         mid = 0.5 * (lo + hi)
@@ -38,14 +38,12 @@ def touching_height(wheel, rail, track, rail_offset, s, config=SearchConfig()):
     return hi, search(hi - 1e-7)
 
 
-def single_wheelset(wheel, rail, contact=None, config=SearchConfig(), offset=None):
+def single_wheelset(wheel, contact=None, config=SearchConfig()):
     """A free wheelset as a :class:`Vehicle` (one body, no suspension) for
-    :func:`jaxrail.simulation.simulate`: ``(Vehicle, VehicleParams)``. ``offset``: track
-    centre to rail profile origin [m] (default :func:`jaxrail.profiles.rail_offset`)."""
+    :func:`jaxrail.simulation.simulate`: ``(Vehicle, VehicleParams)``."""
     contact = ContactParameters() if contact is None else contact
-    offset = rail_offset(rail) if offset is None else offset
     system, params = build_system([RigidBody("wheelset", WHEELSET_MASS, WHEELSET_INERTIA)], [],
                                   [], gravity=(0.0, 0.0, -9.81))
     layout = jnp.stack([0.0, 0.0, wheel.nominal_radius])[None, :]
     return (Vehicle("single wheelset", system, (0,), config),
-            VehicleParams(params, contact, wheel, rail, offset, layout))
+            VehicleParams(params, contact, wheel, layout))

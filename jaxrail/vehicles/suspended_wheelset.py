@@ -36,8 +36,7 @@ import numpy as np
 from .._constants import GRAVITY
 from ..contact.search import SearchConfig
 from ..multibody import Prismatic, Revolute, RigidBody, build_system
-from ..profiles import rail_offset as profile_rail_offset
-from ..profiles import s1002, uic60
+from ..profiles import s1002
 from .from_file import read_toml, vehicle_file_path, vehicle_from_data
 from .trailer import primary_bushings, trailer_values, unsprung_bodies
 from .vehicle import Vehicle, VehicleParams
@@ -104,7 +103,7 @@ def suspended_wheelset_file(curve_radius=None, direction="left", **options
     return vehicle_from_data(data, where=str(path), folder=path.parent, **options)
 
 
-def suspended_wheelset(wheel=None, rail=None, values=None, config=SearchConfig(),
+def suspended_wheelset(wheel=None, values=None, config=SearchConfig(),
                        contact=None, curve_radius=None,
                        direction="left") -> tuple[Vehicle, VehicleParams]:
     """The suspended wheelset as ``(Vehicle, VehicleParams)``; arguments as
@@ -118,7 +117,6 @@ def suspended_wheelset(wheel=None, rail=None, values=None, config=SearchConfig()
     v = values
     r0 = v["wheelset.nominal_radius"]
     wheel = s1002(nominal_radius=r0) if wheel is None else wheel
-    rail = uic60("1:40") if rail is None else rail
     mass = frame_mass(v)
     height = v["bogie.height"]
     bodies = [RigidBody("frame", mass, (mass * FRAME_GYRATION_RADIUS**2,) * 3)]
@@ -140,4 +138,4 @@ def suspended_wheelset(wheel=None, rail=None, values=None, config=SearchConfig()
     layout = np.array([(0.0, 0.0, height)] + unsprung_layout)
     return vehicle, VehicleParams(system_params,
                                   ContactParameters() if contact is None else contact,
-                                  wheel, rail, profile_rail_offset(rail), layout)
+                                  wheel, layout)

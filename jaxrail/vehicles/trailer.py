@@ -29,8 +29,7 @@ import numpy as np
 from .._constants import GRAVITY as GRAVITY  # [m/s^2], as trailer.GRAVITY too
 from ..contact.search import SearchConfig
 from ..multibody import Bushing, Revolute, RigidBody, build_system
-from ..profiles import rail_offset as profile_rail_offset
-from ..profiles import s1002, uic60
+from ..profiles import s1002
 from .vehicle import Vehicle, VehicleParams
 from .wheel_rail import ContactParameters
 
@@ -143,12 +142,12 @@ def primary_bushings(values: dict, k: int, frame: str, x: float, preload: float)
             for side, y in (("left", half), ("right", -half))]
 
 
-def trailer(wheel=None, rail=None, values=None, config=SearchConfig(),
+def trailer(wheel=None, values=None, config=SearchConfig(),
             contact=None) -> tuple[Vehicle, VehicleParams]:
-    """The 11-body trailer as ``(Vehicle, VehicleParams)``.
+    """The 11-body trailer as ``(Vehicle, VehicleParams)`` (its rails are the track's).
 
     Arguments:
-        wheel, rail: profiles (default S1002 with the data's nominal radius on UIC60 1:40).
+        wheel: profile (default S1002 with the data's nominal radius).
         values: :func:`trailer_values` (default the built-in Manchester file).
         config: contact search settings; contact: :class:`ContactParameters` (default
             ones).
@@ -156,7 +155,6 @@ def trailer(wheel=None, rail=None, values=None, config=SearchConfig(),
     v = trailer_values() if values is None else values
     r0 = v["wheelset.nominal_radius"]
     wheel = s1002(nominal_radius=r0) if wheel is None else wheel
-    rail = uic60("1:40") if rail is None else rail
     loads = static_loads(v)
     a, b = v["carbody.bogie_half_distance"], v["bogie.semi_wheelbase"]
     bogie_x = (a, -a)
@@ -195,4 +193,4 @@ def trailer(wheel=None, rail=None, values=None, config=SearchConfig(),
     vehicle = Vehicle("trailer", system, tuple(range(7, 11)), config, axleboxes=tuple(range(3, 7)))
     return vehicle, VehicleParams(system_params,
                                   ContactParameters() if contact is None else contact,
-                                  wheel, rail, profile_rail_offset(rail), np.array(layout))
+                                  wheel, np.array(layout))

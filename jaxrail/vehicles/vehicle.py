@@ -3,8 +3,9 @@
 :class:`Vehicle` is the static part (the multibody structure, which bodies are
 wheelsets and axleboxes, the search settings); :class:`VehicleParams` is the pytree
 of every number that may be changed, batched or differentiated without recompiling
-(masses, suspension, contact parameters, the wheel and rail profiles, the rail
-offset that sets the gauge, and the layout that sets the wheelbase).
+(masses, suspension, contact parameters, the wheel profile, and the layout that sets
+the wheelbase). The rails, their profile and the gauge, are the track's
+(:class:`jaxrail.track.Rails`).
 
 Vehicle frame (used for the nominal layout): x forward, y left, z up, origin on the
 track centreline at the reference point of the vehicle (the carbody centre), z = 0
@@ -20,7 +21,7 @@ from jaxtyping import Array, Float
 from ..contact.search import SearchConfig
 from ..multibody import System, SystemParams
 from ..multibody import quaternion as qt
-from ..profiles import Profile, WheelProfile
+from ..profiles import WheelProfile
 from .wheel_rail import ContactParameters
 
 
@@ -54,9 +55,7 @@ class VehicleParams(eqx.Module):
     Fields:
         system: masses, inertias, joints, suspension (:class:`jaxrail.multibody.SystemParams`).
         contact: :class:`ContactParameters`.
-        wheel, rail: profiles of every wheel and rail.
-        rail_offset: track centre to rail profile origin [m] (half the gauge plus the
-            gauge point's distance from the rail profile origin).
+        wheel: profile of every wheel.
         layout: (n, 3) nominal centre of each body in the vehicle frame [m] at rest
             (wheelset heights are placeholders: the static equilibrium on the rails
             sets them, and shifts the sprung bodies with them).
@@ -65,8 +64,6 @@ class VehicleParams(eqx.Module):
     system: SystemParams
     contact: ContactParameters
     wheel: WheelProfile
-    rail: Profile
-    rail_offset: Float[Array, ""] = eqx.field(converter=lambda x: jnp.asarray(x, jnp.float64))
     layout: Float[Array, "n 3"] = eqx.field(converter=lambda x: jnp.asarray(x, jnp.float64))
 
     @property

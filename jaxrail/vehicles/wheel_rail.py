@@ -208,13 +208,14 @@ def patch_loads(params: ContactParameters, patches, position, velocity, angular_
     return jnp.sum(forces.force, axis=(0, 1)), moment, forces
 
 
-def wheelset_contact_loads(wheel, rail, track, rail_offset, params: ContactParameters,
+def wheelset_contact_loads(wheel, track, params: ContactParameters,
                            position, rotation, velocity, angular_velocity,
                            config: SearchConfig = SearchConfig(), s_guess=None):
     """Total wheel-rail force and moment on a wheelset, with the paper's search.
 
     Arguments:
-        wheel, rail, track, rail_offset: as :func:`jaxrail.contact.search_wheelset`.
+        wheel, track: as :func:`jaxrail.contact.search_wheelset` (the rails are the
+            track's).
         params: :class:`ContactParameters`.
         position (3,), rotation (3, 3): wheelset pose (centre and body axes, global).
         velocity (3,), angular_velocity (3,): of the wheelset, global [m/s, rad/s].
@@ -223,6 +224,6 @@ def wheelset_contact_loads(wheel, rail, track, rail_offset, params: ContactParam
     [N] and its moment about the wheelset centre [N m], both global, with the contact
     patches and per-patch forces for output.
     """
-    patches = search_wheelset(wheel, rail, track, rail_offset, position, rotation, config, s_guess)
+    patches = search_wheelset(wheel, track, position, rotation, config, s_guess)
     force, moment, forces = patch_loads(params, patches, position, velocity, angular_velocity)
     return force, moment, patches, forces

@@ -1,9 +1,8 @@
-"""Wheel and rail profiles named in a vehicle file, and the back-to-back distance.
+"""Wheel profiles named in a vehicle file, and the back-to-back distance.
 
-A profile is a built-in name (wheels: ``S1002``, ``S1002-simplified``; rails:
-``UIC60`` with an inclination, ``"UIC60 1:40"``, ``"UIC60 1:20"``, ``"UIC60 none"``) or
-a profile file (``.prw``/``.prr``, or two-column text in mm in jaxrail's conventions),
-relative to the vehicle file's folder.
+A profile is a built-in name (``S1002``, ``S1002-simplified``) or a profile file
+(``.prw``, or two-column text in mm in jaxrail's conventions), relative to the vehicle
+file's folder. The rail profile is the track's (:class:`jaxrail.track.Rails`).
 
 **Back-to-back.** The code places each wheel's profile origin, its taping line, at
 :data:`~jaxrail.track.rails.HALF_TAPING_DISTANCE` (0.75 m) from the wheelset centre
@@ -21,7 +20,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 import equinox as eqx
 
-from ..profiles import Profile, WheelProfile, read_profile, s1002, simplified_s1002, uic60
+from ..profiles import Profile, WheelProfile, read_profile, s1002, simplified_s1002
 from ..track.rails import HALF_TAPING_DISTANCE
 
 FLANGE_BACK = 0.070  # [m] from the flange back to the taping line (EN 13715)
@@ -76,16 +75,3 @@ def wheel_profile(name: str, nominal_radius: float, back_to_back=None,
     return WheelProfile(surfaces, wheel.nominal_radius,
                         f"{wheel.name} at {1e3 * back_to_back:g} mm back-to-back")
 
-
-def rail_profile(name: str, folder: Path | None = None) -> Profile:
-    """The rail profile ``name``: ``"UIC60 <inclination>"`` or a file."""
-    if not isinstance(name, str) or not name.strip():
-        raise ValueError(f"a rail profile is a name or a file, got {name!r}")
-    words = name.split()
-    if words[0].lower() == "uic60" and len(words) <= 2:
-        return uic60(words[1] if len(words) == 2 else "1:40")
-    path = Path(name) if folder is None else Path(folder) / name
-    if not path.exists():
-        raise ValueError(f"unknown rail profile {name!r}: use 'UIC60 1:40', 'UIC60 1:20', "
-                         f"'UIC60 none' or a profile file ({path} does not exist)")
-    return read_profile(path, kind="rail")
