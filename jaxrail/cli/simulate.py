@@ -53,8 +53,8 @@ def tables_command(args):
     from ..scenarios import load_scenario
 
     scenario = with_integrator(load_scenario(args.scenario), args)
-    vehicle, params, _ = scenario.build()
-    where = (params.wheel, params.rail, params.rail_offset, vehicle.config)
+    vehicle, params, track = scenario.build()
+    where = (params.wheel, track.rails, vehicle.config)
     if args.action == "build":
         _, info = contact_table(*where, progress=not args.quiet, cache=True)
     else:

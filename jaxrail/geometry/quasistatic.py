@@ -15,8 +15,7 @@ from jaxtyping import Array, Float
 
 from ..contact.pose import wheelset_pose
 from ..contact.search import ContactPatches, SearchConfig, deepest_depth, search_wheelset
-from ..profiles.measures import rail_offset as rail_offset_for
-from ..track import straight_track
+from ..track import Rails, straight_track
 
 NEWTON_STEPS = 12
 _PROBE = 1.0e-7  # [m] and [rad]: forward-difference step of the Newton Jacobian
@@ -61,7 +60,8 @@ def wheelset_geometry(wheel, rail, shifts, gauge=1.435, yaw_per_shift=0.0,
     """Quasi-static geometry of a wheelset shifted across straight track.
 
     Arguments:
-        wheel, rail: :class:`WheelProfile` and rail :class:`Profile`.
+        wheel, rail: :class:`WheelProfile` and rail :class:`Profile` (both rails, at
+            ``gauge``: :meth:`jaxrail.track.Rails.at_gauge`).
         shifts: lateral shifts [m], shape (n,), positive to the left; solved in order,
             each from the previous solution (give them sorted).
         gauge: track gauge [m] measured 14 mm below the rail top.
@@ -75,16 +75,15 @@ def wheelset_geometry(wheel, rail, shifts, gauge=1.435, yaw_per_shift=0.0,
     one compilation.
     """
     shifts = jnp.asarray(shifts, dtype=jnp.float64)
-    track = straight_track(_TRACK_LENGTH)
-    offset = rail_offset_for(rail, gauge)
+    track = straight_track(_TRACK_LENGTH, rails=Rails.at_gauge(rail, gauge))
 
     def pose(shift, height, roll):
         return wheelset_pose(track, _STATION, shift, height, roll, yaw_per_shift * shift)
 
     def depths(unknowns, shift):
         position, rotation = pose(shift, unknowns[0], unknowns[1])
-        depth = lambda side: deepest_depth(wheel, rail, track, offset, position, rotation,  # noqa: E731
-                                           side, config, _STATION)
+        depth = lambda side: deepest_depth(wheel, track, position, rotation, side,  # noqa: E731
+                                           config, _STATION)
         return jnp.stack([depth(1.0), depth(-1.0)]) - virtual_penetration
 
     def solve(unknowns, shift):
@@ -106,7 +105,7 @@ def wheelset_geometry(wheel, rail, shifts, gauge=1.435, yaw_per_shift=0.0,
 
     def patches_at(shift, unknowns):
         position, rotation = pose(shift, unknowns[0], unknowns[1])
-        return search_wheelset(wheel, rail, track, offset, position, rotation, config, _STATION)
+        return search_wheelset(wheel, track, position, rotation, config, _STATION)
 
     patches = jax.vmap(patches_at)(shifts, solution)
     main = jnp.argmax(patches.penetration, axis=2)

@@ -23,14 +23,16 @@ import numpy as np
 from .. import compilation
 from ..scenarios.checks import MAX_OUTPUTS
 from ..simulation import SolverOptions, solve
-from ..vehicles.parameters import PARAMETERS, get_values, parameter, set_values
+from ..vehicles.parameters import (PARAMETERS, get_values, parameter, set_values,
+                                   set_values_and_track)
 from .fit import POLISH_ITERATIONS, FitResult, channel_standard_errors, least_squares
 from .measurements import (Measurements, channel_values, check_channels,
                            gaussian_window, read_measurements, sample, write_measurements)
 
 __all__ = ["FitResult", "Identification", "Measurements", "PARAMETERS", "channel_values",
            "get_values", "identify", "least_squares", "parameter", "read_measurements",
-           "set_values", "simulate_channels", "simulation_residuals", "write_measurements"]
+           "set_values", "set_values_and_track", "simulate_channels", "simulation_residuals",
+           "write_measurements"]
 
 
 # Simulation outputs per measurement sample period: the acquisition filter then sees a
@@ -98,8 +100,8 @@ def simulation_residuals(vehicle, params, track, names, measurements: Measuremen
                          speed, misalignment, duration, options: SolverOptions, s0=None,
                          forward=False, adjoint=None, cutoff=None, contact_model=None):
     """``(values (k,), measured (M, C)) -> r (M C,)``: whitened residuals (simulated -
-    measured) / noise, sample-major, of the simulation with the named parameters set
-    to ``values``.
+    measured) / noise, sample-major, of the simulation with the named parameters (the
+    vehicle's and the track's) set to ``values``.
     ``forward``: use diffrax's forward-mode adjoint (for ``jax.jacfwd``) instead of
     recursive checkpointing (for ``jax.grad``; with fixed steps one checkpoint per step,
     else diffrax's default; ``adjoint`` overrides it). ``cutoff`` [Hz]: the
@@ -107,8 +109,7 @@ def simulation_residuals(vehicle, params, track, names, measurements: Measuremen
     (:func:`simulate_channels`). Samples after an early stop (derailed, failed) count as
     1e3 noise levels off."""
     check_channels(measurements.channels, vehicle)
-    for name in names:
-        parameter(name, vehicle, params).get(vehicle, params)  # raises if the vehicle lacks it
+    get_values(vehicle, params, names, track)  # raises if the vehicle lacks one
     if measurements.time[-1] > duration + 1e-12:
         raise ValueError(f"measurements reach {measurements.time[-1]} s, the simulation "
                          f"only {duration} s")
@@ -117,8 +118,8 @@ def simulation_residuals(vehicle, params, track, names, measurements: Measuremen
     adjoint = _adjoint(options, forward, adjoint)
 
     def residuals(values, measured):
-        trial = set_values(vehicle, params, names, values)
-        simulated = simulate_channels(vehicle, trial, track, measurements.channels,
+        trial, moved = set_values_and_track(vehicle, params, track, names, values)
+        simulated = simulate_channels(vehicle, trial, moved, measurements.channels,
                                       measurements.time, speed=speed,
                                       misalignment=misalignment, duration=duration,
                                       options=options, s0=s0, adjoint=adjoint,
@@ -216,7 +217,7 @@ def identify(scenario, measurements: Measurements, names, initial=None, bounds=N
     if not names or len(set(names)) != len(names):
         raise ValueError(f"give distinct parameter names to fit, got {names}")
     vehicle, params, track = scenario.build() if built is None else built
-    current = np.asarray(get_values(vehicle, params, names))
+    current = np.asarray(get_values(vehicle, params, names, track))
     initial = dict(zip(names, current)) | dict(initial or {})
     unknown = set(initial) - set(names)
     if unknown:
@@ -234,7 +235,8 @@ def identify(scenario, measurements: Measurements, names, initial=None, bounds=N
     options = scenario.solver_options()
     common = dict(speed=scenario.speed, misalignment=scenario.misalignment,
                   duration=scenario.duration, options=options, cutoff=cutoff,
-                  contact_model=scenario.contact_model(vehicle, params, contact, progress))
+                  contact_model=scenario.contact_model(vehicle, params, track, contact,
+                                                       progress))
     residuals, forward = _residual_functions(vehicle, params, track, names, measurements,
                                              common)
     bar = None

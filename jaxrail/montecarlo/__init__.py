@@ -168,7 +168,7 @@ def run_samples(scenario, samples: dict, *, duration=None, chunk=None, devices=N
         if keep_results:
             kept.append(result)
 
-    model = scenario.contact_model(vehicle, params, contact, progress)
+    model = scenario.contact_model(vehicle, params, track, contact, progress)
     compile_s, run_s, chunk = run_chunks((vehicle, params, track, model),
                                          (values, speed, shift, seed, scale), chunk, devices,
                                          progress=progress, on_chunk=collect, done=done,

@@ -3,12 +3,13 @@ sharded across devices, in chunks.
 
 Every sample has its own speed [m/s], initial misalignment [m] and values of named
 parameters (:mod:`jaxrail.vehicles.parameters`): the batch is the scenario's
-``VehicleParams`` with a leading batch axis, written by ``set_values`` inside the
-vmapped function. A chunk of K samples is one call of a compiled program; all chunks
-are padded to K (repeating the last sample, whose copies are dropped), so the program
-compiles once. With several devices the chunk is split over them with
-``jax.shard_map`` along the batch axis: each device integrates its own members with
-its own while loop, with no communication between devices.
+``VehicleParams`` and track with a leading batch axis, written by
+``set_values_and_track`` inside the vmapped function (``track_gauge`` is the track's).
+A chunk of K samples is one call of a compiled program; all chunks are padded to K
+(repeating the last sample, whose copies are dropped), so the program compiles once.
+With several devices the chunk is split over them with ``jax.shard_map`` along the
+batch axis: each device integrates its own members with its own while loop, with no
+communication between devices.
 
 Members are independent: each has its own step sizes, derailment event and diffrax
 result code, so one sample that derails or diverges stops alone (its outputs after the
@@ -33,7 +34,7 @@ from jax.sharding import NamedSharding, PartitionSpec
 from .._devices import POOL_THREADS, devices_may_stall, pool_threads
 from . import coordination
 from ..compilation import compile_program
-from ..vehicles.parameters import set_values
+from ..vehicles.parameters import set_values_and_track
 from ..simulation import DerailmentLimits, SolverOptions, solve
 
 AXIS = "batch"
@@ -60,8 +61,8 @@ def batched_solve(vehicle, params, track, contact, values, speed, misalignment, 
     ``limits`` the :class:`~jaxrail.simulation.DerailmentLimits` (default ones). Returns a
     SimulationResult with a leading batch axis B."""
     def one(v, s, m, k, a):
-        p = set_values(vehicle, params, names, v) if names else params
-        return solve(vehicle, p, sample_track(track, realise, k, a), duration, s, m,
+        p, t = set_values_and_track(vehicle, params, track, names, v)
+        return solve(vehicle, p, sample_track(t, realise, k, a), duration, s, m,
                      options=options, limits=limits, contact_model=contact)
 
     return jax.vmap(one)(values, speed, misalignment, seed, scale)

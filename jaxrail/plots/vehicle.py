@@ -4,6 +4,7 @@ force elements at the nominal layout (the vehicle frame: x forward, y left, z up
 import numpy as np
 from matplotlib.patches import Circle, Rectangle
 
+from ..track import standard_rails
 from ._figure import subplots
 from .profiles import save_figure
 
@@ -38,20 +39,21 @@ def _element_lines(system, system_params, layout):
     return lines
 
 
-def plot_vehicle(vehicle, params, path, title=None) -> None:
+def plot_vehicle(vehicle, params, path, title=None, rails=None) -> None:
     """Side view (x, z) above plan view (x, y) of ``vehicle`` written whole to ``path``
     (PNG): each body a box of its layout position and the size of the uniform box of its
     mass and inertia (:func:`box_size`), each wheelset a circle of its nominal radius
     (side) and an axle with two wheels (plan), each force element a line between its
     points (a diamond where its points coincide at rest, as a bushing's), coloured by kind,
-    the rails in grey."""
+    the rails in grey, at the profile origins of ``rails`` (default
+    :func:`jaxrail.track.standard_rails`)."""
     system, system_params = vehicle.system, params.system
     layout = np.asarray(params.layout)
     mass = np.asarray(system_params.bodies.mass)
     inertia = np.diagonal(np.asarray(system_params.bodies.inertia), axis1=1, axis2=2)
     radius = float(params.nominal_radius)
     wheelsets = set(vehicle.wheelsets)
-    half_gauge = float(params.rail_offset)
+    half_gauge = float((standard_rails() if rails is None else rails).offset)
     figure, (side, plan) = subplots(2, 1, figsize=(12.0, 5.5))
     for k, name in enumerate(system.body_names):
         x, y, z = layout[k]

@@ -1,5 +1,6 @@
-"""Scenarios: a vehicle, its profiles, a track layout, a speed, a misalignment, a
-duration and solver options, read from TOML files; built-in ones by name.
+"""Scenarios: a vehicle, its wheel profile, a track (layout, rails, irregularities,
+support), a speed, a misalignment, a duration and solver options, read from TOML files;
+built-in ones by name.
 
 Built-in: ``paper-curve`` (the paper's example with real S1002 / UIC60 1:40 profiles),
 ``paper-curve-simplified`` (the paper's simplified S1002), ``straight``,
@@ -25,7 +26,7 @@ from ..profiles.named import named_profile
 from . import checks
 from .irregularities import IrregularitySpec, parse_irregularities
 from ..simulation import INTEGRATORS, SolverOptions, run_span, simulate
-from ..track import Arc, Straight, Track, Transition
+from ..track import STANDARD_GAUGE, Arc, Rails, Straight, Track, Transition
 from ..track.flexible import FlexibleTrack
 from ..vehicles import CONTACT_MODELS, contact_model
 from ..vehicles.from_file import vehicle_from_file, vehicle_names
@@ -38,6 +39,7 @@ __all__ = ["BUILTIN", "Scenario", "load_scenario", "parse_scenario", "prepare_sc
 BUILTIN = ("paper-curve", "paper-curve-simplified", "paper-curve-irregular", "straight",
            "straight-irregular", "bogie-curve-entry", "suspended-wheelset",
            "coach-curve-irregular", "wagon-straight-irregular")
+_RAIL_KEYS = ("rail", "inclination", "gauge")  # of [track]: the rails are the track's
 _SEGMENTS = {"straight": (Straight, {"length"}),
              "transition": (Transition, {"length"}),
              "arc": (Arc, {"length", "radius", "direction", "cant"})}
@@ -51,8 +53,9 @@ class Scenario:
     description: str
     model: str
     wheel: str | None
-    rail: str | None
+    rail: str
     inclination: str
+    gauge: float
     vehicle_data: str | None
     friction: float
     segments: tuple
@@ -83,19 +86,25 @@ class Scenario:
         steps = int(math.ceil(duration / self.fixed_step - 1e-9))
         return dataclasses.replace(options, fixed_step=self.fixed_step, max_steps=steps + 1)
 
-    def contact_model(self, vehicle, params, contact=None, progress=False):
+    def contact_model(self, vehicle, params, track, contact=None, progress=False):
         """The contact model of this scenario (``contact`` overrides its ``[contact]
-        mode``): the paper's search, or the table of the vehicle's profiles, built or
-        loaded."""
+        mode``): the paper's search, or the table of the vehicle's wheel on ``track``'s
+        rails, built or loaded."""
         return contact_model(self.contact if contact is None else contact, vehicle, params,
-                             progress)
+                             track, progress)
+
+    def rails(self) -> Rails:
+        """The rails of ``[track] rail``, ``inclination`` and ``gauge``."""
+        return Rails.at_gauge(self._profile("rail", "track"), self.gauge)
 
     def track(self) -> Track:
-        """The track of ``[track] segments`` with the ``[irregularities]``; ValueError
-        names the file and the segment or the irregularity's entry."""
+        """The track of ``[track] segments`` and rails with the ``[irregularities]``;
+        ValueError names the file and the segment or the irregularity's entry."""
+        rails = self.rails()
         try:
             track = Track.from_segments([_SEGMENTS[s["kind"]][0](
-                **{k: v for k, v in s.items() if k != "kind"}) for s in self.segments])
+                **{k: v for k, v in s.items() if k != "kind"}) for s in self.segments],
+                rails=rails)
         except ValueError as error:
             raise ValueError(f"{self.source}: [track] segments: {error}") from error
         if self.flexible is not None:  # its values checked when the file was read
@@ -126,19 +135,19 @@ class Scenario:
                 f"but the run's wheelsets go from {first:.1f} to {last:.1f} m ({duration:g} s at "
                 f"{speed:g} m/s); give a longer file or a shorter run")
 
-    def _profile(self, key):
-        """The ``[vehicle] key`` profile (key "wheel" or "rail"), None where the scenario
-        leaves it to the vehicle file; ValueError names the file, the key and what was
-        given."""
+    def _profile(self, key, table):
+        """The ``[table] key`` profile (``[vehicle] wheel``, ``[track] rail``), None where
+        the scenario leaves the wheel to the vehicle file; ValueError names the file, the
+        key and what was given."""
         name = getattr(self, key)
         if name is None:
             return None
         try:
             kind, profile = named_profile(name, self.inclination, kind=None)
         except ValueError as error:
-            raise ValueError(f"{self.source}: [vehicle] {key}: {error}") from error
+            raise ValueError(f"{self.source}: [{table}] {key}: {error}") from error
         if kind != key:
-            raise ValueError(f"{self.source}: [vehicle] {key}: {name!r} is a {kind} profile")
+            raise ValueError(f"{self.source}: [{table}] {key}: {name!r} is a {kind} profile")
         return profile
 
     def build(self, curve_radius=None):
@@ -148,8 +157,7 @@ class Scenario:
         # every model is a built-in vehicle file; [vehicle] data replaces its named
         # parameters (the suspended wheelset's primary longitudinal stiffness included)
         values = None if self.vehicle_data is None else trailer_values(self.vehicle_data)
-        options = {"wheel": self._profile("wheel"), "rail": self._profile("rail"),
-                   "parameters": values}
+        options = {"wheel": self._profile("wheel", "vehicle"), "parameters": values}
         if self.model == "suspended-wheelset":
             curved = [k + 1 for k, seg in enumerate(self.segments) if seg["kind"] != "straight"]
             if curved and curve_radius is None:
@@ -163,9 +171,9 @@ class Scenario:
         return vehicle, params, self.track()
 
 
-_TABLES = {"vehicle": {"model", "file", "wheel", "rail", "inclination", "data"},
+_TABLES = {"vehicle": {"model", "file", "wheel", "data"},
            "contact": {"friction", "mode"},
-           "track": {"segments", "flexible"},
+           "track": {"segments", "rail", "inclination", "gauge", "flexible"},
            "run": {"speed", "misalignment", "duration"},
            "solver": {"rtol", "atol", "output_rate", "fixed_step", "integrator",
                       "jacobian_every"},
@@ -236,11 +244,19 @@ def _vehicle_path(vehicle, key, where):
 
 
 def _profile_name(vehicle, key, where):
-    """``[vehicle] wheel`` or ``rail``: optional; a vehicle file names its own, which
-    the scenario's replaces where given."""
+    """``[vehicle] wheel``: optional; a vehicle file names its own, which the
+    scenario's replaces where given."""
     if key not in vehicle:
         return None
     return checks.text(vehicle, key, where, "[vehicle]")
+
+
+def _no_rails_in_vehicle(vehicle, where):
+    """ValueError for the rails' keys in ``[vehicle]``: the rails are the track's."""
+    for key in _RAIL_KEYS if isinstance(vehicle, dict) else ():
+        if key in vehicle:
+            raise ValueError(f"{where}: [vehicle] {key}: the rails belong to the track: give "
+                             f"{key} in [track] (rail, inclination, gauge)")
 
 
 def _vehicle_model(vehicle, where):
@@ -275,9 +291,10 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
     for name in ("vehicle", "track", "run", "solver"):
         if name not in raw:
             raise ValueError(f"{where}: missing table [{name}]")
+    _no_rails_in_vehicle(raw["vehicle"], where)
     tables = {name: checks.known_keys(raw.get(name, {}), keys, where, f"[{name}]")
               for name, keys in _TABLES.items() if keys is not None}
-    vehicle, run, solver = tables["vehicle"], tables["run"], tables["solver"]
+    vehicle, track, run, solver = (tables[k] for k in ("vehicle", "track", "run", "solver"))
     contact, number = tables["contact"], checks.number
     fixed_step = solver.get("fixed_step")
     scenario = Scenario(
@@ -285,12 +302,13 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
         description=checks.text(raw, "description", where, "the scenario", ""),
         model=_vehicle_model(vehicle, where),
         wheel=_profile_name(vehicle, "wheel", where),
-        rail=_profile_name(vehicle, "rail", where),
-        inclination=checks.text(vehicle, "inclination", where, "[vehicle]", "1:40"),
+        rail=checks.text(track, "rail", where, "[track]", "uic60"),
+        inclination=checks.text(track, "inclination", where, "[track]", "1:40"),
+        gauge=number(track.get("gauge", STANDARD_GAUGE), "gauge", where, "[track] gauge"),
         vehicle_data=_vehicle_path(vehicle, "data", where),
         vehicle_file=_vehicle_path(vehicle, "file", where),
         friction=number(contact.get("friction", 0.4), "friction", where, "[contact] friction"),
-        segments=_segments(tables["track"].get("segments"), where),
+        segments=_segments(track.get("segments"), where),
         speed=number(run.get("speed"), "speed", where, "[run] speed"),
         misalignment=number(run.get("misalignment", 0.0), "misalignment", where,
                             "[run] misalignment"),
@@ -307,7 +325,7 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
         jacobian_every=checks.count(solver.get("jacobian_every", 8), "[solver] jacobian_every",
                                     where, 1, 1000),
         irregularities=parse_irregularities(raw.get("irregularities"), where),
-        flexible=_flexible(tables["track"].get("flexible"), where),
+        flexible=_flexible(track.get("flexible"), where),
     )
     checks.run_size(scenario.duration, scenario.output_rate, scenario.fixed_step, where)
     return scenario
@@ -352,7 +370,7 @@ def run_scenario(scenario: Scenario, duration=None, progress=False, contact=None
     duration = scenario.duration if duration is None else float(duration)
     vehicle, params, track = (prepare_scenario(scenario, duration) if prepared is None
                               else prepared)
-    model = scenario.contact_model(vehicle, params, contact, progress)
+    model = scenario.contact_model(vehicle, params, track, contact, progress)
     result = simulate(vehicle, params, track, duration, scenario.speed, scenario.misalignment,
                       options=scenario.solver_options(duration, progress), contact_model=model)
     return result, vehicle, params, track

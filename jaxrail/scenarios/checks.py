@@ -24,6 +24,7 @@ RANGES = {
     "length": (1e-3, 1e5, "m"),
     "radius": (10.0, 1e7, "m"),
     "cant": (-0.2, 0.2, "m"),
+    "gauge": (*PARAMETERS["track_gauge"].range, PARAMETERS["track_gauge"].unit),
     "irregularity_scale": (0.0, 10.0, "-"),
     "irregularity_step": (0.01, 5.0, "m"),
     "defect_wavelength": (0.1, 1000.0, "m"),

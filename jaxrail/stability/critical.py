@@ -23,7 +23,8 @@ import numpy as np
 from jax.flatten_util import ravel_pytree
 
 from ..vehicles.loads import resolve_contact_model
-from ..vehicles.parameters import check_contact_follows, get_values, parameter, set_values
+from ..vehicles.parameters import (check_contact_follows, get_values, parameter,
+                                   set_values_and_track)
 from .curving import SteadyCurving
 from .linear import (check_track, comoving_rhs, is_one_arc, linear_system, modes,
                      state_size, steady_motion)
@@ -163,7 +164,7 @@ class LinearStability:
                              "track only (in a curve the steady curving state would need "
                              "differentiating too)")
         params = self.params if params is None else params
-        values = get_values(self.vehicle, params, names)
+        values = get_values(self.vehicle, params, names, self.track)
         x = jnp.concatenate([jnp.asarray([point.speed], jnp.float64), values])
         steady, a, c = self._about(params, x[0])
         flat_steady, unravel = ravel_pytree(steady)
@@ -173,14 +174,14 @@ class LinearStability:
             z0 = jnp.zeros(state_size(vehicle))
 
             def product(x, flat_steady, params, direction):
-                params = set_values(vehicle, params, names, x[1:])
-                rhs = lambda z: comoving_rhs(z, vehicle, params, track,  # noqa: E731
+                params, moved = set_values_and_track(vehicle, params, track, names, x[1:])
+                rhs = lambda z: comoving_rhs(z, vehicle, params, moved,  # noqa: E731
                                              unravel(flat_steady), model)
                 return jax.jvp(rhs, (z0,), (direction,))[1]
 
             def steady_of(x, params):
-                params = set_values(vehicle, params, names, x[1:])
-                return ravel_pytree(steady_motion(vehicle, params, track, x[0], model))[0]
+                params, moved = set_values_and_track(vehicle, params, track, names, x[1:])
+                return ravel_pytree(steady_motion(vehicle, params, moved, x[0], model))[0]
 
             # two programs: the steady motion's derivative (through the rest pose's
             # solve) and the partials of A v about a given steady motion

@@ -31,7 +31,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..vehicles.loads import contact_loads
-from ..vehicles.parameters import check_contact_follows, get_values, parameter, set_values
+from ..vehicles.parameters import (check_contact_follows, get_values, parameter,
+                                   set_values_and_track)
 from .curving import (CurvingState, SteadyCurving, curving_residual, curving_setup,
                       curving_state, held_body, newton_step)
 
@@ -78,12 +79,12 @@ class CurvingWear:
         model, body = curving.model, held_body(vehicle)
 
         def residual_and_wear(u, x, params, speed):
-            params = set_values(vehicle, params, names, x)
-            base, frame_rate, centre, _ = curving_setup(vehicle, params, track, speed, model)
-            r = curving_residual(u, vehicle, params, track, base, frame_rate, centre, body,
+            params, moved = set_values_and_track(vehicle, params, track, names, x)
+            base, frame_rate, centre, _ = curving_setup(vehicle, params, moved, speed, model)
+            r = curving_residual(u, vehicle, params, moved, base, frame_rate, centre, body,
                                  model)
             q, qdot = curving_state(u, vehicle, base, frame_rate, centre)
-            wear = wheel_wear_numbers(contact_loads(vehicle, params, track, q, qdot,
+            wear = wheel_wear_numbers(contact_loads(vehicle, params, moved, q, qdot,
                                                     model)[3])
             return r, wear
 
@@ -101,7 +102,7 @@ class CurvingWear:
         params = self.params if params is None else params
         state = self.curving(speed, params, start=start)
         u = jnp.asarray(state.unknowns)
-        x = get_values(self.vehicle, params, self.names)
+        x = get_values(self.vehicle, params, self.names, self.track)
         speed = jnp.asarray(state.speed, jnp.float64)
         wear, w_u, r_x, w_x = (np.asarray(a) for a in self._partials(u, x, params, speed))
         setup_values = self.curving._setup(params, self.track, speed)

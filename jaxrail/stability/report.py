@@ -46,11 +46,12 @@ def curve_option(text: str, option: str = "--curve") -> tuple[float, float]:
     return radius, cant
 
 
-def curve_track(radius, cant=0.0, rail_centre_distance=1.5) -> Track:
+def curve_track(radius, cant=0.0, rail_centre_distance=1.5, rails=None) -> Track:
     """A left curve of ``radius`` [m] and ``cant`` [m], 300 m of one arc from the origin
-    heading along +x (the stability analysis in a curve)."""
+    heading along +x (the stability analysis in a curve), with ``rails`` (default the
+    standard ones, :func:`jaxrail.track.standard_rails`)."""
     return Track.from_segments([Arc(300.0, radius, "left", cant)],
-                               rail_centre_distance=rail_centre_distance)
+                               rail_centre_distance=rail_centre_distance, rails=rails)
 
 
 SPEED_RANGE_FACTORS = (0.25, 3.0)
@@ -80,18 +81,19 @@ def study_setup(scenario, curve=None, contact="online", progress=False):
     the search at every evaluation ("online")."""
     vehicle, params, track = scenario.build(None if curve is None else curve[0])
     if curve is not None:
-        track = curve_track(*curve, rail_centre_distance=track.rail_centre_distance)
-    model = (contact_model(contact, vehicle, params, progress=progress)
+        track = curve_track(*curve, rail_centre_distance=track.rail_centre_distance,
+                            rails=track.rails)
+    model = (contact_model(contact, vehicle, params, track, progress=progress)
              if contact == "table" else None)
     return vehicle, params, track.with_irregularity(None).with_support(None), model
 
 
-def equivalent_conicity(vehicle, params, amplitude=CONICITY_AMPLITUDE_M) -> float:
-    """EN 15302 equivalent conicity [-] of the vehicle's wheel on its rail at the
-    track gauge its rail offset sets, at ``amplitude`` [m] (integral method on the
-    quasi-static rolling radius difference over +-10 mm)."""
-    gauge = float(get_values(vehicle, params, ["track_gauge"])[0])
-    geometry = wheelset_geometry(params.wheel, params.rail, _SHIFTS, gauge=gauge)
+def equivalent_conicity(vehicle, params, track, amplitude=CONICITY_AMPLITUDE_M) -> float:
+    """EN 15302 equivalent conicity [-] of the vehicle's wheel on the track's rails at
+    their gauge, at ``amplitude`` [m] (integral method on the quasi-static rolling
+    radius difference over +-10 mm)."""
+    gauge = float(get_values(vehicle, params, ["track_gauge"], track)[0])
+    geometry = wheelset_geometry(params.wheel, track.rails.profile, _SHIFTS, gauge=gauge)
     entries = conicity_entries(_SHIFTS, np.asarray(geometry.delta_r),
                                float(params.wheel.nominal_radius), (1e3 * amplitude,))
     return entries[0]["tan_gamma_e"]
@@ -129,7 +131,7 @@ def stability_study(vehicle, params, track, low, high, points=9, model=None) -> 
         "linear_critical_speed_m_s": critical.speed,
         "linear_critical_speed_km_h": 3.6 * critical.speed,
         "hunting_frequency_hz": critical.frequency_hz,
-        "equivalent_conicity": equivalent_conicity(vehicle, params),
+        "equivalent_conicity": equivalent_conicity(vehicle, params, track),
         "equivalent_conicity_amplitude_m": CONICITY_AMPLITUDE_M,
         "method": (f"eigenvalues of the forward-mode Jacobian about the steady motion on "
                    f"{where}; critical speed where the least damped hunting mode's "
@@ -168,10 +170,11 @@ def format_study(study: dict) -> str:
 
 
 def ramp_track(track, low, high, rate, hold):
-    """A straight with ``track``'s rail centre distance long enough [m] for the
+    """A straight with ``track``'s rail centre distance and rails long enough [m] for the
     ramp-down from ``high`` to ``low`` [m/s] at ``rate`` [m/s^2] after ``hold`` [s]."""
     length = 100.0 + high * (hold + (high - low) / rate)
-    return straight_track(length, rail_centre_distance=track.rail_centre_distance)
+    return straight_track(length, rail_centre_distance=track.rail_centre_distance,
+                          rails=track.rails)
 
 
 def nonlinear_study(vehicle, params, track, low, high, rate=GENSYS_RATE, resolution=0.5,
