@@ -14,7 +14,6 @@ import jax
 import numpy as np
 import pytest
 
-from jaxrail.profiles import rail_offset, uic60
 from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.track import straight_track
 from jaxrail.simulation import simulate_single_wheelset
@@ -23,10 +22,8 @@ T1 = 0.5
 
 
 def _run(progress, lateral=2e-3):
-    rail = uic60()
-    return simulate_single_wheelset(conical_wheel(0.05), rail, straight_track(30.0),
-                                    rail_offset(rail), 5.0, lateral, T1, n_outputs=101,
-                                    progress=progress)[0]
+    return simulate_single_wheelset(conical_wheel(0.05), straight_track(30.0), 5.0, lateral,
+                                    T1, n_outputs=101, progress=progress)[0]
 
 
 @pytest.fixture(scope="module")

@@ -15,8 +15,8 @@ name = "x"
 [vehicle]
 model = "trailer"
 wheel = "s1002"
-rail = "uic60"
 [track]
+rail = "uic60"
 segments = [{ kind = "straight", length = 100.0 }]
 [run]
 speed = 10.0
@@ -92,7 +92,7 @@ BAD_INPUTS = [
     (('[{ kind = "straight", length = 100.0 }]', ARC.replace("0.1 }", '"lots" }')),
      "track segment 1: cant must be a number [m], got 'lots'"),
     (('[{ kind = "straight", length = 100.0 }]', "[1, 2]"), "track segment 1 must be a table"),
-    (('rail = "uic60"', 'rail = "uic60"\ndata = "nofile.toml"'),
+    (('wheel = "s1002"', 'wheel = "s1002"\ndata = "nofile.toml"'),
      "[vehicle] data: no such file"),
     (("[run]", "[run]\nmisalignment = nan"), "[run] misalignment must be within"),
     (("[solver]", "[solver]\noutput_rate = 1e9"), "[solver] output_rate must be within"),
@@ -144,7 +144,14 @@ BAD_INPUTS = [
     (('model = "trailer"', "model = 3"), "[vehicle] model must be a string, got 3"),
     (("[vehicle]", "[vehicle]\nwheelbase = 2.5"), "unknown key 'wheelbase' in [vehicle]"),
     (('rail = "uic60"', 'rail = "uic60"\ninclination = 40'),
-     "[vehicle] inclination must be a string, got 40"),
+     "[track] inclination must be a string, got 40"),
+    # the rails are the track's: [track] rail, inclination and gauge [m]
+    (('wheel = "s1002"', 'wheel = "s1002"\nrail = "uic60"'),
+     "bad.toml: [vehicle] rail: the rails belong to the track: give rail in [track]"),
+    (('wheel = "s1002"', 'wheel = "s1002"\ngauge = 1.435'),
+     "bad.toml: [vehicle] gauge: the rails belong to the track: give gauge in [track]"),
+    (('rail = "uic60"', 'rail = "uic60"\ngauge = 1435.0'),
+     "bad.toml: [track] gauge must be within [0.6, 1.7] m, got 1435.0"),
     # [track] flexible: true, false or a table of [lateral, vertical] values
     (("length = 100.0 }]", 'length = 100.0 }]\nflexible = "yes"'),
      "bad.toml: [track] flexible must be true, false or a table of mass, stiffness and "
@@ -162,11 +169,12 @@ BAD_INPUTS = [
 # Entries whose values are only known wrong when the scenario is built (profiles by name
 # or file, the layout's joints): build() names the file and the entry, before compiling.
 BAD_BUILDS = [
-    (('rail = "uic60"', 'rail = "uic61"'), "bad.toml: [vehicle] rail: unknown profile 'uic61'"),
+    (('rail = "uic60"', 'rail = "uic61"'), "bad.toml: [track] rail: unknown profile 'uic61'"),
+    (('rail = "uic60"', 'rail = "s1002"'), "bad.toml: [track] rail: 's1002' is a wheel profile"),
     (('wheel = "s1002"', 'wheel = "s1003"'), "bad.toml: [vehicle] wheel: unknown profile 's1003'"),
     (('wheel = "s1002"', 'wheel = "uic60"'), "bad.toml: [vehicle] wheel: 'uic60' is a rail profile"),
     (('rail = "uic60"', 'rail = "uic60"\ninclination = "1:30"'),
-     "bad.toml: [vehicle] rail: uic60: unknown inclination '1:30'"),
+     "bad.toml: [track] rail: uic60: unknown inclination '1:30'"),
     (('length = 100.0 }]', 'length = 100.0 }, { kind = "transition", length = 30.0 }]'),
      "bad.toml: [track] segments: segments[1] (Transition): a transition at the end"),
     (('[{ kind = "straight", length = 100.0 }]',
@@ -288,7 +296,7 @@ def test_a_scenario_names_a_vehicle_file_relative_to_itself(tmp_path):
     folder = tmp_path / "study"
     folder.mkdir()
     (folder / "my_vehicle.toml").write_text((data_folder() / "trailer.toml").read_text())
-    text = MINIMAL.replace('model = "trailer"\nwheel = "s1002"\nrail = "uic60"',
+    text = MINIMAL.replace('model = "trailer"\nwheel = "s1002"',
                            'file = "my_vehicle.toml"')
     (folder / "run.toml").write_text(text)
     from_file, params_file, _ = load_scenario(folder / "run.toml").build()
@@ -305,6 +313,18 @@ def test_a_scenario_names_a_vehicle_file_relative_to_itself(tmp_path):
     ('wheel = "s1002"', "needs a model"),
 ])
 def test_bad_vehicle_entries_are_named(vehicle, message):
-    text = MINIMAL.replace('model = "trailer"\nwheel = "s1002"\nrail = "uic60"', vehicle)
+    text = MINIMAL.replace('model = "trailer"\nwheel = "s1002"', vehicle)
     with pytest.raises(ValueError, match=re.escape(message)):
         parse_scenario(text, "bad.toml")
+
+
+def test_the_tracks_rail_and_gauge_reach_its_rails():
+    from jaxrail.track import standard_rails
+
+    _, _, track = parse_scenario(MINIMAL).build()
+    assert float(track.rails.offset) == float(standard_rails().offset)
+    text = MINIMAL.replace('rail = "uic60"', 'rail = "uic60"\ninclination = "1:20"\n'
+                           'gauge = 1.445')
+    rails = parse_scenario(text).build()[2].rails
+    assert rails.profile.name == "UIC60 1:20"
+    assert float(rails.gauge) == pytest.approx(1.445, abs=1e-15)

@@ -11,8 +11,8 @@ import pytest
 
 from jaxrail.contact import search_wheelset, wheelset_pose
 from jaxrail.contact.table import Axis, TableGrid, build_contact_table, table_patches
-from jaxrail.profiles import rail_offset, s1002, uic60
-from jaxrail.track import Irregularity, straight_track, track_frame
+from jaxrail.profiles import s1002, uic60
+from jaxrail.track import Irregularity, Rails, straight_track, track_frame
 
 LENGTH = 100.0
 STEP = 0.01  # [m] samples of the harmonics (the interpolation is then exact to 1e-10 m)
@@ -33,12 +33,11 @@ def harmonics(s):
 
 @pytest.fixture(scope="module")
 def setup():
-    wheel, rail = s1002(), uic60("1:40")
-    offset = float(rail_offset(rail, 1.435))
+    wheel, rails = s1002(), Rails.at_gauge(uic60("1:40"), 1.435)
     s = np.arange(0.0, LENGTH + STEP / 2, STEP)
-    irregular = straight_track(LENGTH).with_irregularity(
-        Irregularity(harmonics(s).T, 0.0, STEP))
-    return wheel, rail, offset, straight_track(LENGTH), irregular
+    ideal = straight_track(LENGTH, rails=rails)
+    irregular = ideal.with_irregularity(Irregularity(harmonics(s).T, 0.0, STEP))
+    return wheel, rails, ideal, irregular
 
 
 def _poses(track, lateral, vertical):
@@ -62,7 +61,7 @@ def _cases(ideal):
 
 
 def _compare(patch_fn, setup):
-    wheel, rail, offset, ideal, irregular = setup
+    _, _, ideal, irregular = setup
     (lateral, vertical), shifted = _cases(ideal)
     on_irregular = jax.vmap(lambda p, r: patch_fn(irregular, p, r))(*_poses(irregular, lateral,
                                                                              vertical))
@@ -89,19 +88,19 @@ def _compare(patch_fn, setup):
 
 
 def test_online_search_sees_the_displaced_rails(setup):
-    wheel, rail, offset, _, _ = setup
-    search = jax.jit(lambda track, p, r: search_wheelset(wheel, rail, track, offset, p, r))
+    wheel, _, _, _ = setup
+    search = jax.jit(lambda track, p, r: search_wheelset(wheel, track, p, r))
     _compare(search, setup)
 
 
 def test_table_lookup_sees_the_displaced_rails_without_a_rebuild(setup):
-    wheel, rail, offset, _, _ = setup
-    table, _ = build_contact_table(wheel, rail, offset, grid=GRID)
+    wheel, rails, _, _ = setup
+    table, _ = build_contact_table(wheel, rails, grid=GRID)
 
     @jax.jit
     def lookup(track, p, r):
-        return jax.vmap(lambda side: table_patches(table, wheel, rail, track, offset, p, r,
-                                                   side))(jnp.array([1.0, -1.0]))
+        return jax.vmap(lambda side: table_patches(table, wheel, track, p, r, side))(
+            jnp.array([1.0, -1.0]))
 
     _compare(lookup, setup)
 
@@ -109,13 +108,13 @@ def test_table_lookup_sees_the_displaced_rails_without_a_rebuild(setup):
 def test_search_gradient_in_the_amplitude_matches_central_differences(setup):
     """d(penetration, contact position) / d(scale) through the search, against central
     differences, and finite at scale 0 (the ideal track)."""
-    wheel, rail, offset, ideal, irregular = setup
+    wheel, _, ideal, irregular = setup
     position, rotation = wheelset_pose(ideal, 44.0, 1.0e-3, 0.45977)
 
     def outputs(scale):
         track = irregular.with_irregularity(
             Irregularity(irregular.irregularity.values, 0.0, STEP, scale))
-        patches = search_wheelset(wheel, rail, track, offset, position, rotation)
+        patches = search_wheelset(wheel, track, position, rotation)
         return jnp.stack([jnp.sum(patches.penetration), jnp.sum(patches.active * patches.y_wheel)])
 
     jacobian = jax.jit(jax.jacfwd(outputs))

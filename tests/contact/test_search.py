@@ -13,18 +13,18 @@ from jaxrail.profiles import s1002
 from jaxrail.profiles.analytic import CircularProfile, conical_wheel
 from jaxrail.profiles.measures import rail_offset
 from jaxrail.profiles.uic60 import uic60
-from jaxrail.track import rail_frame, straight_track
+from jaxrail.track import Rails, rail_frame, straight_track
 
-TRACK = straight_track(20.0)
 STATION = 10.0
 WHEEL, RAIL = s1002(), uic60()
 OFFSET = float(rail_offset(RAIL))
+TRACK = straight_track(20.0, rails=Rails(RAIL, OFFSET))
 
 
 @jax.jit
 def real_search(lateral, vertical, roll, yaw):
     position, rotation = wheelset_pose(TRACK, STATION, lateral, vertical, roll, yaw)
-    return search_wheelset(WHEEL, RAIL, TRACK, OFFSET, position, rotation, SearchConfig(), STATION)
+    return search_wheelset(WHEEL, TRACK, position, rotation, SearchConfig(), STATION)
 
 
 def touching_height(lateral, roll=0.0, yaw=0.0):
@@ -47,7 +47,8 @@ def coned_wheel_on_circular_head(lowered):
     wheel, rail = conical_wheel(CONE), CircularProfile(HEAD, half_width=0.03)
     touching = 0.46 + np.tan(CONE) * HEAD * np.sin(CONE) - HEAD * (1.0 - np.cos(CONE))
     position, rotation = wheelset_pose(TRACK, STATION, 0.0, touching - lowered, 0.0, 0.0)
-    return jax.jit(search_wheelset)(wheel, rail, TRACK, 0.75, position, rotation, SearchConfig(), STATION)
+    track = TRACK.with_rails(Rails(rail, 0.75))
+    return jax.jit(search_wheelset)(wheel, track, position, rotation, SearchConfig(), STATION)
 
 
 def test_coned_wheel_on_circular_head_analytic():
@@ -91,7 +92,7 @@ def test_corrected_eq12_and_eq13_with_yaw():
     position, rotation = wheelset_pose(TRACK, STATION, 2e-3, 0.46, 0.0, yaw)
     surface = WHEEL.surfaces[0]
     for side, k in ((1.0, 0), (-1.0, 1)):
-        _, axes = rail_frame(TRACK, float(out.s_rail[k, 0]), side, OFFSET)
+        _, axes = rail_frame(TRACK, float(out.s_rail[k, 0]), side)
         frame = wheel_frame(rotation[:, 1], axes[:, 0])
         y = out.y_wheel[k, 0]
         radius, slope = 0.46 + surface.height(y), surface.slope(y)
@@ -134,7 +135,7 @@ def test_two_point_contact_hands_over_continuously():
     def sweep(laterals):
         def one(lateral):
             position, rotation = wheelset_pose(TRACK, STATION, lateral, height, 0.0, 0.0)
-            _, geometry = _wheel_geometry(TRACK, OFFSET, position, rotation, 1.0, STATION)
+            _, geometry = _wheel_geometry(TRACK, position, rotation, 1.0, STATION)
             _, y_deepest = _surface_deepest(WHEEL.surfaces[0], WHEEL, RAIL, geometry, SearchConfig())
             return real_search(lateral, height, 0.0, 0.0), y_deepest
 
@@ -184,8 +185,8 @@ def test_sub_strip_refinement_is_continuous_and_accurate():
     @jax.jit
     def both(lateral):
         position, rotation = wheelset_pose(TRACK, STATION, lateral, height, 0.0, 0.0)
-        coarse = search_wheelset(WHEEL, RAIL, TRACK, OFFSET, position, rotation, SearchConfig(), STATION)
-        dense = search_wheelset(WHEEL, RAIL, TRACK, OFFSET, position, rotation, fine, STATION)
+        coarse = search_wheelset(WHEEL, TRACK, position, rotation, SearchConfig(), STATION)
+        dense = search_wheelset(WHEEL, TRACK, position, rotation, fine, STATION)
         return coarse.y_wheel[0, 0], dense.y_wheel[0, 0], coarse.active[0, 0], dense.active[0, 0]
 
     coarse, dense, on_coarse, on_dense = (np.asarray(a) for a in jax.lax.map(both, jnp.asarray(shifts)))
@@ -219,8 +220,8 @@ def test_vehicle_vmap_equals_loop():
     poses = [wheelset_pose(TRACK, STATION - 2.0 * k, laterals[k], heights[k], 0.0, yaws[k]) for k in range(4)]
     positions = jnp.stack([p for p, _ in poses])
     rotations = jnp.stack([r for _, r in poses])
-    batched = jax.jit(search_vehicle)(WHEEL, RAIL, TRACK, OFFSET, positions, rotations)
+    batched = jax.jit(search_vehicle)(WHEEL, TRACK, positions, rotations)
     for k in range(4):
-        single = jax.jit(search_wheelset)(WHEEL, RAIL, TRACK, OFFSET, positions[k], rotations[k])
+        single = jax.jit(search_wheelset)(WHEEL, TRACK, positions[k], rotations[k])
         for field in ("penetration", "y_wheel", "y_rail", "dx", "normal", "active"):
             np.testing.assert_allclose(getattr(batched, field)[k], getattr(single, field), atol=1e-12)

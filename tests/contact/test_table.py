@@ -12,8 +12,7 @@ from jaxrail.contact.table import Axis, TableGrid, build_contact_table, table_pa
 from jaxrail.contact.table_cache import contact_table, load_table, table_key
 from jaxrail.geometry import wheelset_geometry
 from jaxrail.profiles import s1002, uic60
-from jaxrail.profiles.measures import rail_offset
-from jaxrail.track import straight_track
+from jaxrail.track import Rails, straight_track
 
 # the default grid's lateral and approach axes, roll nodes 5 mrad apart; no yaw
 GRID = TableGrid(lateral=Axis.span(-0.016, 0.016, 1.0e-4), yaw=Axis.span(0.0, 0.0, 1.0),
@@ -24,21 +23,20 @@ STATION, LENGTH = 10.0, 20.0  # jaxrail.geometry's straight track
 
 @pytest.fixture(scope="module", params=["1:40", "1:20"])
 def geometry_case(request):
-    wheel, rail = s1002(), uic60(request.param)
-    offset = float(rail_offset(rail, 1.435))
-    table, diagnostics = build_contact_table(wheel, rail, offset, grid=GRID)
+    wheel, rails = s1002(), Rails.at_gauge(uic60(request.param), 1.435)
+    table, diagnostics = build_contact_table(wheel, rails, grid=GRID)
     shifts = np.arange(-0.008, 0.00801, 2.5e-4)
-    online = wheelset_geometry(wheel, rail, shifts, virtual_penetration=DEPTH)
-    return wheel, rail, offset, table, diagnostics, shifts, online
+    online = wheelset_geometry(wheel, rails.profile, shifts, virtual_penetration=DEPTH)
+    return wheel, rails, table, diagnostics, shifts, online
 
 
-def _table_at(wheel, rail, offset, table, shifts, geometry):
-    track = straight_track(LENGTH)
+def _table_at(wheel, rails, table, shifts, geometry):
+    track = straight_track(LENGTH, rails=rails)
 
     def one(shift, height, roll):
         position, rotation = wheelset_pose(track, STATION, shift, height, roll)
-        return jax.vmap(lambda side: table_patches(table, wheel, rail, track, offset, position,
-                                                   rotation, side))(jnp.array([1.0, -1.0]))
+        return jax.vmap(lambda side: table_patches(table, wheel, track, position, rotation,
+                                                   side))(jnp.array([1.0, -1.0]))
 
     return jax.jit(jax.vmap(one))(jnp.asarray(shifts), geometry.height, geometry.roll)
 
@@ -55,9 +53,9 @@ def _main(patches, field):
 
 
 def test_geometry_functions_match_the_search_away_from_the_jumps(geometry_case):
-    wheel, rail, offset, table, diagnostics, shifts, online = geometry_case
+    wheel, rails, table, diagnostics, shifts, online = geometry_case
     assert diagnostics["nodes"] == 2 * GRID.lateral.count * GRID.roll.count
-    tabled = _table_at(wheel, rail, offset, table, shifts, online)
+    tabled = _table_at(wheel, rails, table, shifts, online)
     on_y = np.asarray(online.main_patch("y_wheel"))
     # Away from the jumps, wheel by wheel: where the search's main contact point moves
     # less than 0.5 mm per 0.25 mm of shift on both sides of the shift and the wheel has
@@ -115,14 +113,14 @@ def test_limited_rates_keep_the_interpolation_between_levels():
 
 def test_table_loads_are_smooth_and_differentiable(geometry_case):
     """No NaN and finite-difference gradients in the lateral shift and the depth."""
-    wheel, rail, offset, table, _, _, online = geometry_case
-    track = straight_track(LENGTH)
+    wheel, rails, table, _, _, online = geometry_case
+    track = straight_track(LENGTH, rails=rails)
     height = float(online.height[len(online.height) // 2])
 
     def total_force(shift, sink):
         position, rotation = wheelset_pose(track, STATION, shift, height - sink, 0.0)
-        patches = jax.vmap(lambda side: table_patches(table, wheel, rail, track, offset, position,
-                                                      rotation, side))(jnp.array([1.0, -1.0]))
+        patches = jax.vmap(lambda side: table_patches(table, wheel, track, position, rotation,
+                                                      side))(jnp.array([1.0, -1.0]))
         return jnp.sum(patches.penetration ** 1.5 * 1e6)
 
     f = jax.jit(total_force)
@@ -142,24 +140,24 @@ def test_table_loads_are_smooth_and_differentiable(geometry_case):
 
 def test_cache_round_trip_and_keys(tmp_path, monkeypatch):
     monkeypatch.setenv("JAXRAIL_CACHE_DIR", str(tmp_path))
-    wheel, rail = s1002(), uic60("1:40")
-    offset = float(rail_offset(rail, 1.435))
+    wheel, rails = s1002(), Rails.at_gauge(uic60("1:40"), 1.435)
     # GRID's approach levels: the build program compiled for the module's tables serves
     grid = TableGrid(lateral=Axis.span(-0.002, 0.002, 1e-3), yaw=Axis.span(0.0, 0.0, 1.0),
                      roll=Axis.span(0.0, 0.0, 1.0), approach=GRID.approach)
-    table, info = contact_table(wheel, rail, offset, grid=grid)
+    table, info = contact_table(wheel, rails, grid=grid)
     assert not info["cached"] and info["nodes"] == 10  # 5 lateral nodes, 2 sides
-    again, info_again = contact_table(wheel, rail, offset, grid=grid)
+    again, info_again = contact_table(wheel, rails, grid=grid)
     assert info_again["cached"] and info_again["path"] == info["path"]
     np.testing.assert_array_equal(np.asarray(again.values), np.asarray(table.values))
     assert again.grid == table.grid and again.surfaces == table.surfaces
     loaded, _ = load_table(info["path"])
     np.testing.assert_array_equal(np.asarray(loaded.values), np.asarray(table.values))
     # what the table depends on changes the key
-    key = table_key(wheel, rail, offset, table_cache_config(), grid)
-    assert key != table_key(wheel, uic60("1:20"), offset, table_cache_config(), grid)
-    assert key != table_key(wheel, rail, offset + 1e-3, table_cache_config(), grid)
-    assert key != table_key(wheel, rail, offset, table_cache_config(), TableGrid())
+    key = table_key(wheel, rails, table_cache_config(), grid)
+    assert key != table_key(wheel, Rails(uic60("1:20"), rails.offset), table_cache_config(), grid)
+    assert key != table_key(wheel, Rails(rails.profile, rails.offset + 1e-3),
+                            table_cache_config(), grid)
+    assert key != table_key(wheel, rails, table_cache_config(), TableGrid())
     (tmp_path / "bad.npz").write_bytes(b"not a table")
     with pytest.raises(ValueError, match="not a jaxrail contact table"):
         load_table(tmp_path / "bad.npz")
@@ -178,9 +176,9 @@ def test_table_mode_gradients_wrt_stiffness_and_friction(geometry_case):
 
     from jaxrail.vehicles import TableContact, single_wheelset, wheelset_loads
 
-    wheel, rail, offset, table, _, _, online = geometry_case
-    vehicle, params = single_wheelset(wheel, rail, offset=offset)
-    track = straight_track(LENGTH)
+    wheel, rails, table, _, _, online = geometry_case
+    vehicle, params = single_wheelset(wheel)
+    track = straight_track(LENGTH, rails=rails)
     k = len(online.height) // 2 + 6  # 1.5 mm off centre
     position, rotation = wheelset_pose(track, STATION, float(online.shift[k]),
                                        float(online.height[k]) - 2e-5, float(online.roll[k]),

@@ -15,8 +15,8 @@ from jaxrail.contact.table import Axis, TableGrid, build_contact_table, table_pa
 from jaxrail.contact.table.build import _pose_on_straight
 from jaxrail.contact.table.grid import _WHERE, FIELDS
 from jaxrail.contact.table.slots import _RAMP, _continue_empty, _match
-from jaxrail.profiles import rail_offset, s1002, uic60
-from jaxrail.track import straight_track
+from jaxrail.profiles import s1002, uic60
+from jaxrail.track import Rails, straight_track
 
 SIDE = -1.0  # the right wheel: twins between 1.5 and 3.5 mm of shift at a roll of -3 to 4 mrad
 # the default grid's lateral and roll steps over the part of it where the twins are
@@ -27,19 +27,18 @@ DEPTH = 5.0e-5  # [m] the deepest patch's depth: a wheel's static load on the tr
 
 @pytest.fixture(scope="module")
 def twins():
-    wheel, rail = s1002(), uic60("1:40")
-    offset = float(rail_offset(rail, 1.435))
-    table, _ = build_contact_table(wheel, rail, offset, grid=GRID)
-    track, config = straight_track(100.0), SearchConfig()
+    wheel, rails = s1002(), Rails.at_gauge(uic60("1:40"), 1.435)
+    table, _ = build_contact_table(wheel, rails, grid=GRID)
+    track, config = straight_track(100.0, rails=rails), SearchConfig()
 
     def pose(lateral, vertical, roll):
-        return _pose_on_straight(track, offset, table.radius, lateral, vertical, 0.0, roll, SIDE)
+        return _pose_on_straight(track, table.radius, lateral, vertical, 0.0, roll, SIDE)
 
     def both(lateral, roll):
         """Search and table patches' depths (P,) and wheel points (P,) with the wheel
         lowered until its deepest patch is DEPTH deep (bisection)."""
         def deepest(z):
-            return deepest_depth(wheel, rail, track, offset, *pose(lateral, z, roll), SIDE, config)
+            return deepest_depth(wheel, track, *pose(lateral, z, roll), SIDE, config)
 
         def halve(bracket, _):
             lo, hi = bracket  # the wheel deeper than DEPTH at lo, shallower at hi
@@ -50,8 +49,8 @@ def twins():
         (z, _), _ = jax.lax.scan(halve, (jnp.asarray(-1e-3), jnp.asarray(1e-3)), None,
                                  length=40)
         position, rotation = pose(lateral, z, roll)
-        found = search_wheel(wheel, rail, track, offset, position, rotation, SIDE, config)
-        tabled = table_patches(table, wheel, rail, track, offset, position, rotation, SIDE)
+        found = search_wheel(wheel, track, position, rotation, SIDE, config)
+        tabled = table_patches(table, wheel, track, position, rotation, SIDE)
         return found.penetration, found.y_wheel, tabled.penetration, tabled.y_wheel
 
     # half-way between the nodes along both axes

@@ -21,9 +21,9 @@ name = "wheelset-irregular"
 [vehicle]
 model = "single-wheelset"
 wheel = "s1002"
+[track]
 rail = "uic60"
 inclination = "1:40"
-[track]
 segments = [{ kind = "straight", length = 60.0 }]
 [irregularities]
 spectrum = "german-high"

@@ -26,7 +26,6 @@ import numpy as np
 import pytest
 
 from jaxrail.multibody import velocities_from_twists
-from jaxrail.profiles import uic60
 from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.simulation import SolverOptions, solve
 from jaxrail.stability import LinearStability
@@ -38,13 +37,13 @@ from jaxrail.track.layout import Arc, Straight
 from jaxrail.vehicles import get_values, set_values, trailer_values
 from jaxrail.vehicles.suspended_wheelset import LONGITUDINAL_STIFFNESS, suspended_wheelset
 
-WHEEL, RAIL = conical_wheel(0.025, nominal_radius=0.46), uic60("1:40")
+WHEEL = conical_wheel(0.025, nominal_radius=0.46)  # on the standard UIC60 1:40
 RADIUS = 3000.0  # [m]
 SPEED = 30.0  # [m/s]
 
 
 def _curve(radius):
-    vehicle, params = suspended_wheelset(WHEEL, RAIL, curve_radius=radius)
+    vehicle, params = suspended_wheelset(WHEEL, curve_radius=radius)
     return vehicle, params, Track.from_segments([Arc(300.0, radius, "left")])
 
 
@@ -56,7 +55,7 @@ def curving():
 
 @pytest.fixture(scope="module")
 def coefficients():
-    vehicle, params = suspended_wheelset(WHEEL, RAIL)
+    vehicle, params = suspended_wheelset(WHEEL)
     c = jax.jit(lambda p, v: wheelset_coefficients(vehicle, p, straight_track(200.0), v))
     return {k: float(v) for k, v in c(params, SPEED).items()}
 
@@ -142,7 +141,7 @@ def test_bad_inputs_are_named(curving):
     vehicle, params, track, steady = curving
     with pytest.raises(ValueError, match="one arc"):
         SteadyCurving(vehicle, params, straight_track(100.0))
-    straight_vehicle, straight_params = suspended_wheelset(WHEEL, RAIL)
+    straight_vehicle, straight_params = suspended_wheelset(WHEEL)
     with pytest.raises(ValueError, match="prismatic joint.*curve_radius"):
         SteadyCurving(straight_vehicle, straight_params, track)
     with pytest.raises(ValueError, match="speed must be > 0"):
@@ -154,7 +153,7 @@ def test_bad_inputs_are_named(curving):
     with pytest.raises(ValueError, match="gradient is implemented on straight track"):
         in_curve.critical_speed_gradient(None, ["primary_lateral_stiffness"])
     with pytest.raises(ValueError, match="curve_radius must be > 0"):
-        suspended_wheelset(WHEEL, RAIL, curve_radius=-1.0)
+        suspended_wheelset(WHEEL, curve_radius=-1.0)
 
 
 def test_each_solve_starts_from_the_state_solved_at_the_nearest_speed():

@@ -14,7 +14,6 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrail.profiles import uic60
 from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.stability import LinearStability
 from jaxrail.stability.wheelset import polach_slopes_along, wheelset_coefficients
@@ -34,8 +33,7 @@ RANGE = (200.0, 300.0)  # [m/s]: the critical speed is near 238 m/s
 
 @pytest.fixture(scope="module")
 def wheelset():
-    vehicle, params = suspended_wheelset(conical_wheel(CONE, nominal_radius=0.46),
-                                         uic60("1:40"))
+    vehicle, params = suspended_wheelset(conical_wheel(CONE, nominal_radius=0.46))
     track = straight_track(200.0)
     stability = LinearStability(vehicle, params, track)
     coefficients = jax.jit(lambda p, v: wheelset_coefficients(vehicle, p, track, v))
@@ -133,8 +131,7 @@ def _with_yaw_dampers(series_stiffness, damping):
     """The fixture's suspended wheelset with a longitudinal Maxwell damper each side,
     frame to axlebox body, 1.3 m from the centreline (a yaw damper's place), unloaded
     at rest."""
-    plain, plain_params = suspended_wheelset(conical_wheel(CONE, nominal_radius=0.46),
-                                             uic60("1:40"))
+    plain, plain_params = suspended_wheelset(conical_wheel(CONE, nominal_radius=0.46))
     v = {**trailer_values(), "primary.longitudinal_stiffness": LONGITUDINAL_STIFFNESS}
     mass, height = frame_mass(v), v["bogie.height"]
     unsprung, _, joints = unsprung_bodies(v, (0.0,))
@@ -154,7 +151,6 @@ def _with_yaw_dampers(series_stiffness, damping):
     vehicle = Vehicle("suspended wheelset with yaw dampers", system, plain.wheelsets,
                       plain.config, axleboxes=plain.axleboxes)
     return vehicle, VehicleParams(system_params, plain_params.contact, plain_params.wheel,
-                                  plain_params.rail, plain_params.rail_offset,
                                   plain_params.layout)
 
 

@@ -7,18 +7,21 @@ import pytest
 import scipy.special
 
 from jaxrail import track as T
+from jaxrail.profiles import uic60
 
 R, LT, LA, LS = 300.0, 80.0, 200.0, 50.0  # radius, transition, arc, straight [m]
 CANT = 0.150  # m
 BASE = 1.5  # rail-centre distance [m]
 OFFSET = 0.75303  # rail profile origin from track centre [m] (UIC60 1:40, 1435 mm)
+RAILS = T.Rails(uic60("1:40"), OFFSET)
 POS_TOL = 1e-9  # m, positions against closed forms
 FRAME_TOL = 1e-13  # orthonormality
 U, F, DX = 0.02, -0.004, 0.1  # a rail profile point (field-side lateral, height) and dx [m]
 
 
 def make_curve(direction="left", radius=R, cant=CANT):
-    return T.Track.from_segments(T.curve_layout(radius, direction, cant, LS, LT, LA, LS))
+    return T.Track.from_segments(T.curve_layout(radius, direction, cant, LS, LT, LA, LS),
+                                 rails=RAILS)
 
 
 LEFT = make_curve("left")
@@ -29,7 +32,7 @@ TOTAL = 2 * LS + 2 * LT + LA
 
 def _evaluate(track, s):
     """Every geometry function at scalar s (one compiled function for the module)."""
-    origin, a = T.rail_frame(track, s, -1, OFFSET)
+    origin, a = T.rail_frame(track, s, -1)
     return dict(
         pos=T.centreline_position(track, s),
         heading=T.heading(track, s),
@@ -39,9 +42,9 @@ def _evaluate(track, s):
         frame=T.track_frame(track, s),
         rail_right=origin,
         rail_frame=a,
-        point_left=T.rail_point(track, s, 1, OFFSET, U, F, DX),
-        rail_left=T.rail_frame(track, s, "left", OFFSET)[0],
-        point_right=T.rail_point(track, s, "right", OFFSET, U, F, DX),
+        point_left=T.rail_point(track, s, 1, U, F, DX),
+        rail_left=T.rail_frame(track, s, "left")[0],
+        point_right=T.rail_point(track, s, "right", U, F, DX),
     )
 
 
@@ -57,7 +60,7 @@ def flatten(values, axis=-1):
 
 def _flat(track, s):
     """Every public geometry function at s, as one vector of 31 numbers (for grads)."""
-    origin, a = T.rail_frame(track, s, -1, OFFSET)
+    origin, a = T.rail_frame(track, s, -1)
     parts = (
         T.centreline_position(track, s),
         T.heading(track, s),
@@ -67,7 +70,7 @@ def _flat(track, s):
         T.track_frame(track, s),
         origin,
         a,
-        T.rail_point(track, s, 1, OFFSET, U, F, DX),
+        T.rail_point(track, s, 1, U, F, DX),
     )
     return jnp.concatenate([jnp.ravel(x) for x in parts])
 
@@ -312,9 +315,9 @@ def test_rail_point_mirrors_field_side():
 
 def test_bad_side_and_shapes():
     with pytest.raises(ValueError, match="side must be"):
-        T.rail_frame(LEFT, 1.0, "up", OFFSET)
+        T.rail_frame(LEFT, 1.0, "up")
     with pytest.raises(ValueError, match="side must be"):
-        T.rail_point(LEFT, 1.0, 2, OFFSET, 0.0, 0.0)
+        T.rail_point(LEFT, 1.0, 2, 0.0, 0.0)
     with pytest.raises(ValueError, match="s must be a scalar"):
         T.centreline_position(LEFT, jnp.zeros(3))
 
@@ -328,7 +331,7 @@ def test_vmap_matches_scalar_jit():
     for k, sk in enumerate(s):
         np.testing.assert_allclose(batch[k], flat_scalar(LEFT, sk), rtol=0, atol=1e-13)
     # side as a traced +-1 (vmapped over both rails) agrees with the strings
-    sides = jax.jit(jax.vmap(lambda sd: T.rail_point(LEFT, s[2], sd, OFFSET, U, F, DX)))
+    sides = jax.jit(jax.vmap(lambda sd: T.rail_point(LEFT, s[2], sd, U, F, DX)))
     both = sides(jnp.array([1.0, -1.0]))
     v = at(LEFT, s[2])
     np.testing.assert_allclose(both[0], v["point_left"], atol=1e-13)
@@ -355,7 +358,8 @@ def test_grad_rail_point_in_profile_coordinates():
     s = LS + LT + 40.0
 
     def point(q):
-        return T.rail_point(RIGHT, s, "right", q[0], q[1], q[2], q[3])
+        track = RIGHT.with_rails(T.Rails(RIGHT.rails.profile, q[0]))
+        return T.rail_point(track, s, "right", q[1], q[2], q[3])
 
     jac = jax.jit(jax.jacrev(point))(jnp.array([OFFSET, 0.01, 0.002, 0.0]))
     f = at(RIGHT, s)["frame"]
@@ -368,7 +372,7 @@ def test_grad_rail_point_in_profile_coordinates():
 def _rail_and_end(params):
     radius, cant = params
     track = make_curve("left", radius, cant)
-    origin, _ = T.rail_frame(track, LS + LT + LA - 10.0, "right", OFFSET)
+    origin, _ = T.rail_frame(track, LS + LT + LA - 10.0, "right")
     end = T.centreline_position(track, TOTAL + 10.0)
     return jnp.concatenate([origin, end, T.cant_angle(track, LS + 10.0)[None]])
 

@@ -10,7 +10,7 @@ import pytest
 from scipy import integrate, signal
 
 from jaxrail.cli import main
-from jaxrail.track import CHANNELS, Irregularity, rail_frame, straight_track
+from jaxrail.track import CHANNELS, Irregularity, Rails, rail_frame, standard_rails, straight_track
 from jaxrail.track.defects import cosine_defect
 from jaxrail.track.measured import parse_irregularity, read_irregularity, write_irregularity
 from jaxrail.track.spectra import SPECTRA, band_variance, check_band, realisation
@@ -110,13 +110,14 @@ def test_beyond_the_samples_each_channel_keeps_its_end_value():
 def test_rails_move_by_the_documented_convention():
     a, v, c, g = 2e-3, -1e-3, 0.6e-3, 0.8e-3
     irregularity = Irregularity(np.tile([a, v, c, g], (4, 1)), 0.0, 10.0)
-    ideal, irregular = straight_track(40.0), straight_track(40.0).with_irregularity(irregularity)
+    ideal = straight_track(40.0, rails=Rails(standard_rails().profile, 0.75))
+    irregular = ideal.with_irregularity(irregularity)
     for side, y, z in ((1.0, a + g / 2, v + c / 2), (-1.0, a - g / 2, v - c / 2)):
-        moved = np.asarray(rail_frame(irregular, 12.0, side, 0.75)[0])
-        design = np.asarray(rail_frame(ideal, 12.0, side, 0.75)[0])
+        moved = np.asarray(rail_frame(irregular, 12.0, side)[0])
+        design = np.asarray(rail_frame(ideal, 12.0, side)[0])
         np.testing.assert_allclose(moved - design, [0.0, y, z], atol=1e-15)
     # the left rail lies higher than the right by the cross level, the gauge is wider
-    left, right = (np.asarray(rail_frame(irregular, 12.0, k, 0.75)[0]) for k in (1.0, -1.0))
+    left, right = (np.asarray(rail_frame(irregular, 12.0, k)[0]) for k in (1.0, -1.0))
     assert left[2] - right[2] == pytest.approx(c, abs=1e-15)
     assert left[1] - right[1] == pytest.approx(1.5 + g, abs=1e-15)
 

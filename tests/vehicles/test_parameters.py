@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 from jaxrail.contact.normal import Hertz
-from jaxrail.profiles import uic60
 from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.multibody import join_coordinates
 from jaxrail.multibody.forces import element_deformation
 from jaxrail.track import straight_track
 from jaxrail.vehicles import bogie, trailer, trailer_values, vehicle_accelerations
-from jaxrail.vehicles.parameters import PARAMETERS, get_values, set_values
+from jaxrail.vehicles.parameters import (PARAMETERS, get_values, set_values,
+                                         set_values_and_track)
 from jaxrail.vehicles.suspended_wheelset import suspended_wheelset
 from jaxrail.vehicles.initial import wheelset_load
 from jaxrail.vehicles.wheel_rail import ContactParameters
@@ -74,15 +74,19 @@ def test_every_parameter_has_a_unit():
 
 def test_gauge_and_wheelbase_move_the_rails_the_axles_and_their_seats():
     vehicle, params = trailer()
-    assert np.allclose(get_values(vehicle, params, ("track_gauge", "wheelbase")),
+    track = straight_track(30.0)
+    names = ("track_gauge", "wheelbase")
+    assert np.allclose(get_values(vehicle, params, names, track),
                        [1.435, 2.0 * VALUES["bogie.semi_wheelbase"]])
-    changed = set_values(vehicle, params, ("track_gauge", "wheelbase"), jnp.array([1.445, 2.9]))
+    changed, moved = set_values_and_track(vehicle, params, track, names,
+                                          jnp.array([1.445, 2.9]))
     # the gauge by brute force: where the rail head is 14 mm below its top, on a 1 um grid
-    y = np.arange(*changed.rail.domain, 1e-6)
-    z = np.asarray(jax.vmap(changed.rail.height)(jnp.asarray(y)))
+    rail = moved.rails.profile
+    y = np.arange(*rail.domain, 1e-6)
+    z = np.asarray(jax.vmap(rail.height)(jnp.asarray(y)))
     top = np.argmax(z)
     inside = y[:top][z[:top] >= z[top] - 0.014][0]
-    assert abs(2.0 * (float(changed.rail_offset) + inside) - 1.445) < 4e-6
+    assert abs(2.0 * (float(moved.rails.offset) + inside) - 1.445) < 4e-6
     # the axles 2.9 m apart in each bogie, the carbody and frames where they were
     x = np.asarray(changed.layout[:, 0])
     assert np.allclose(x[np.asarray(vehicle.wheelsets)], [10.95, 8.05, -8.05, -10.95])
@@ -118,8 +122,8 @@ def test_gauge_and_wheelbase_gradients_under_jit_and_vmap():
     def lateral(x):
         """Squared horizontal accelerations: the gauge moves the contact patches, the
         wheelbase the primary suspension's seats (longitudinal deflection)."""
-        qddot = vehicle_accelerations(vehicle, set_values(vehicle, params, names, x), track,
-                                      0.0, q, qdot)
+        trial, moved = set_values_and_track(vehicle, params, track, names, x)
+        qddot = vehicle_accelerations(vehicle, trial, moved, 0.0, q, qdot)
         return jnp.sum(qddot.reshape(n, 7)[:, :2] ** 2)
 
     x = jnp.array([1.437, 2.5])
@@ -150,7 +154,7 @@ def test_wheelset_mass_sets_each_wheelset_and_its_load():
 
 
 def test_the_cone_angle_of_a_coned_wheel_is_named_and_a_measured_profile_has_none():
-    vehicle, params = suspended_wheelset(conical_wheel(0.025), uic60("1:40"))
+    vehicle, params = suspended_wheelset(conical_wheel(0.025))
     steeper = set_values(vehicle, params, ("wheel_cone_angle",), jnp.array([0.03]))
     assert np.isclose(get_values(vehicle, steeper, ("wheel_cone_angle",))[0], 0.03)
     # the profile itself changes: its height 10 mm off centre is -tan(angle) y
@@ -167,3 +171,13 @@ def test_a_contact_table_refuses_the_geometry_parameters_before_building():
     with pytest.raises(ValueError, match=r"\['track_gauge'\]: the contact table is built"):
         run_samples(load_scenario("straight"), {"track_gauge": np.array([1.43, 1.44])},
                     contact="table")
+
+
+def test_the_gauge_is_the_tracks_and_set_values_says_where_to_set_it():
+    vehicle, params = bogie()
+    with pytest.raises(ValueError, match="track_gauge is the track's: give get_values the "
+                       "track"):
+        get_values(vehicle, params, ("track_gauge",))
+    with pytest.raises(ValueError, match=r"track_gauge is the track's: set it with "
+                       r"set_values_and_track\(vehicle, params, track, names, values\)"):
+        set_values(vehicle, params, ("friction", "track_gauge"), jnp.array([0.3, 1.44]))

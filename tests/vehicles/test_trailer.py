@@ -23,7 +23,7 @@ from jaxrail.results import read_results
 from jaxrail.scenarios import load_scenario
 from jaxrail.simulation import DerailmentLimits, simulate
 from jaxrail.vehicles import read_vehicle_data, trailer, trailer_values
-from jaxrail.vehicles.parameters import set_values
+from jaxrail.vehicles.parameters import set_values_and_track
 
 G = 9.81
 CARBODY, BOGIE, UNSPRUNG = 32000.0, 2615.0, 1813.0  # [kg], reference [V-src]
@@ -184,13 +184,14 @@ def test_a_derailment_stops_the_run_and_keeps_the_results_so_far(command_run):
 
 
 def test_gauge_and_wheelbase_change_without_recompiling(command_run):
-    """The gauge and the wheelbase are numbers of the parameters: a run with others
-    takes the command's program, and its wheelsets sit where the new wheelbase puts them."""
+    """The gauge (the track's) and the wheelbase (the vehicle's) are numbers: a run with
+    others takes the command's program, and its wheelsets sit where the new wheelbase
+    puts them."""
     scenario = load_scenario(SCENARIO)
     vehicle, params, track = scenario.build()
-    changed = set_values(vehicle, params, ("track_gauge", "wheelbase"),
-                         np.array([1.440, 2.8]))
-    result = simulate(vehicle, changed, track, 0.05, scenario.speed, scenario.misalignment,
+    changed, moved = set_values_and_track(vehicle, params, track, ("track_gauge", "wheelbase"),
+                                          np.array([1.440, 2.8]))
+    result = simulate(vehicle, changed, moved, 0.05, scenario.speed, scenario.misalignment,
                       options=scenario.solver_options(DURATION))
     assert float(result.compile_time_s) == 0.0
     assert result.status == "successful"

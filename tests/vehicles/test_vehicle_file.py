@@ -56,8 +56,7 @@ def test_trailer_file_builds_the_python_trailer(trailers):
     assert v_file == v_py
     _same_tree(p_file.system, p_py.system)  # every number of SystemParams
     np.testing.assert_array_equal(p_file.layout, p_py.layout)
-    np.testing.assert_array_equal(p_file.rail_offset, p_py.rail_offset)
-    _same_tree((p_file.wheel, p_file.rail, p_file.contact), (p_py.wheel, p_py.rail, p_py.contact))
+    _same_tree((p_file.wheel, p_file.contact), (p_py.wheel, p_py.contact))
     _same_tree(p_file, p_py)
 
 
@@ -104,12 +103,11 @@ def _bitwise_same(file_built, python_built):
 
 
 def _python_builders():
-    from jaxrail.profiles import uic60
     from jaxrail.vehicles import bogie, single_wheelset
     from jaxrail.vehicles.suspended_wheelset import suspended_wheelset
 
     return {"bogie": bogie, "suspended-wheelset": suspended_wheelset,
-            "single-wheelset": lambda: single_wheelset(s1002(), uic60("1:40"))}
+            "single-wheelset": lambda: single_wheelset(s1002())}
 
 
 @pytest.mark.parametrize("name", ["bogie", "single-wheelset", "suspended-wheelset"])
@@ -221,7 +219,7 @@ def axle_template(frame):
 def wagon(carbody_x=0.0):
     """A two-axle wagon: wheelsets directly under the carbody."""
     return {
-        "vehicle": {"name": "wagon", "rail": "UIC60 1:40"},
+        "vehicle": {"name": "wagon"},
         "parameters": {"r0": q(460, "mm"), "a": q(4.5, "m"),
                        "carbody": {"mass": q(20, "t"), "x": q(carbody_x, "m")}},
         "body": [{"name": "carbody", "mass": "carbody.mass",
@@ -234,7 +232,7 @@ def wagon(carbody_x=0.0):
 def coach(axles_x=("b", "-b")):
     """A bogie coach; three axles per bogie with ``axles_x = ("b", 0, "-b")``."""
     return {
-        "vehicle": {"name": "coach", "rail": "UIC60 1:40"},
+        "vehicle": {"name": "coach"},
         "parameters": {"r0": q(0.46, "m"), "a": q(9.5, "m"), "b": q(1.28, "m"),
                        "m_c": q(32, "t"), "m_b": q(2615, "kg")},
         "body": [{"name": "carbody", "mass": "m_c", "inertia": q([56.8, 1970, 1970], "t m^2"),
@@ -372,7 +370,6 @@ def test_docs_example_builds():
     assert vehicle.system.body_names == ("carbody", "axlebox_1", "axlebox_2", "wheelset_1",
                                          "wheelset_2")
     np.testing.assert_array_equal(params.system.forces["bushing"].preload[:, 2], -49050.0)
-    assert float(params.rail_offset) == float(vehicle_from_file("trailer")[1].rail_offset)
 
 
 def test_back_to_back_moves_the_profile():
@@ -484,7 +481,10 @@ BAD = [  # (id, change, table, key, words in the message)
      "use[0]", "x", ["'v' is a vector"]),
     ("mirrored body without side", _set(AXLE + ("body", 0, "mirror"), True),
      "template.axle.joint[0] 'axle'", "body_i", ["mirrored: name axlebox_left or axlebox_right"]),
-    ("missing rail", _set(("vehicle", "rail"), DELETE), "vehicle", "rail", ["missing"]),
+    ("a rail is the track's", _set(("vehicle", "rail"), "UIC60 1:40"), "vehicle", "rail",
+     ["belong to the track", "scenario's [track]"]),
+    ("a gauge is the track's", _set(("vehicle", "gauge"), q(1435, "mm")), "vehicle", "gauge",
+     ["belong to the track", "scenario's [track]"]),
     ("unknown table", _set(("bodies",), []), "top level", "bodies", ["unknown table"]),
     ("static preload on a spring", _spring_static, "template.axle.element[1] 'spring'",
      "preload", ["static"]),

@@ -7,14 +7,13 @@ import pytest
 
 from jaxrail.contact import Hertz, SearchConfig, hertz, wheelset_pose
 from jaxrail.contact.kalker import kalker_coefficients
-from jaxrail.profiles import rail_offset, s1002, uic60
+from jaxrail.profiles import s1002
 from jaxrail.profiles.analytic import conical_wheel
 from jaxrail.track import straight_track
 from jaxrail.vehicles import ContactParameters, wheelset_contact_loads
 from jaxrail.vehicles.wheel_rail import MIN_CURVATURE_RATIO
 
-WHEEL, RAIL, TRACK = s1002(), uic60(), straight_track(20.0)
-OFFSET = rail_offset(RAIL)
+WHEEL, TRACK = s1002(), straight_track(20.0)  # UIC60 1:40 at 1435 mm
 SPEED = 10.0
 
 
@@ -23,8 +22,8 @@ def loads(params, height, yaw, lateral_velocity):
     position, rotation = wheelset_pose(TRACK, 10.0, 0.0, height, 0.0, yaw)
     velocity = jnp.array([SPEED, lateral_velocity, 0.0])
     spin = SPEED / 0.46 * rotation[:, 1]  # rolling about the axle at the nominal radius
-    return wheelset_contact_loads(WHEEL, RAIL, TRACK, OFFSET, params, position, rotation,
-                                  velocity, spin, SearchConfig(), 10.0)
+    return wheelset_contact_loads(WHEEL, TRACK, params, position, rotation, velocity, spin,
+                                  SearchConfig(), 10.0)
 
 
 def test_static_normal_force_is_hertz():
@@ -59,7 +58,7 @@ def test_lateral_creep_force_opposes_lateral_slip_with_kalker_slope():
     slip = 1e-5 * SPEED
     run = jax.jit(wheelset_contact_loads)
     params = ContactParameters(normal_law=Hertz())
-    args = (cylinder, RAIL, TRACK, OFFSET, params, position, rotation, jnp.array([SPEED, slip, 0.0]))
+    args = (cylinder, TRACK, params, position, rotation, jnp.array([SPEED, slip, 0.0]))
     patch = run(*args, SPEED / 0.46 * rotation[:, 1])[2]
     depth = float(jnp.linalg.norm(patch.wheel_point[0, 0] - patch.rail_point[0, 0]))
     # Roll freely: the interface (half the overlap at the contact point below the wheel
