@@ -26,8 +26,8 @@ from jaxrail import enable_float64
 enable_float64()
 
 from jaxrail.contact import SearchConfig, deepest_depth, search_vehicle, wheelset_pose  # noqa: E402
-from jaxrail.profiles import rail_offset, s1002, uic60  # noqa: E402
-from jaxrail.track import straight_track  # noqa: E402
+from jaxrail.profiles import s1002, uic60  # noqa: E402
+from jaxrail.track import Rails, straight_track  # noqa: E402
 
 SHIFTS = (-1.0e-3, 0.0, 1.5e-3, 3.0e-3)  # [m]
 YAWS = (0.0, 1.0e-3, -1.0e-3, 2.0e-3)  # [rad]
@@ -36,14 +36,14 @@ PENETRATION = 5.0e-5  # [m]
 SPACINGS = (4.0e-3, 2.0e-3, 1.0e-3, 0.5e-3)  # [m]
 
 
-def _poses(wheel, rail, track, offset):
+def _poses(wheel, track):
     """Height and roll of each wheelset so that both wheels penetrate by PENETRATION."""
 
     @jax.jit
     def depths(unknowns, shift, yaw, station):
         position, rotation = wheelset_pose(track, station, shift, unknowns[0], unknowns[1], yaw)
-        return jnp.stack([deepest_depth(wheel, rail, track, offset, position, rotation, side,
-                                        SearchConfig(), station) for side in (1.0, -1.0)])
+        return jnp.stack([deepest_depth(wheel, track, position, rotation, side, SearchConfig(),
+                                        station) for side in (1.0, -1.0)])
 
     positions, rotations = [], []
     for shift, yaw, station in zip(SHIFTS, YAWS, STATIONS):
@@ -60,18 +60,18 @@ def _poses(wheel, rail, track, offset):
     return jnp.stack(positions), jnp.stack(rotations)
 
 
-def _time(config, wheel, rail, track, offset, positions, rotations, calls):
-    search = jax.jit(lambda w, r, t, o, p, q: search_vehicle(w, r, t, o, p, q, config))
+def _time(config, wheel, track, positions, rotations, calls):
+    search = jax.jit(lambda w, t, p, q: search_vehicle(w, t, p, q, config))
     start = time.perf_counter()
-    result = search(wheel, rail, track, offset, positions, rotations)
+    result = search(wheel, track, positions, rotations)
     jax.block_until_ready(result)
     compile_s = time.perf_counter() - start
     for _ in range(5):  # warm-up
-        jax.block_until_ready(search(wheel, rail, track, offset, positions, rotations))
+        jax.block_until_ready(search(wheel, track, positions, rotations))
     times = []
     for _ in range(calls):
         start = time.perf_counter()
-        jax.block_until_ready(search(wheel, rail, track, offset, positions, rotations))
+        jax.block_until_ready(search(wheel, track, positions, rotations))
         times.append(time.perf_counter() - start)
     strips = int(config.strip_grid(wheel.surfaces[0]).shape[0])
     active = np.asarray(result.active)
@@ -91,17 +91,15 @@ def main():
     parser.add_argument("--calls", type=int, default=50, help="timed calls per setting")
     args = parser.parse_args()
     load_before = os.getloadavg()
-    wheel, rail = s1002(), uic60("1:40")
-    track = straight_track(40.0)
-    offset = rail_offset(rail, 1.435)
-    positions, rotations = _poses(wheel, rail, track, offset)
+    wheel = s1002()
+    track = straight_track(40.0, rails=Rails.at_gauge(uic60("1:40"), 1.435))
+    positions, rotations = _poses(wheel, track)
 
-    default, reference = _time(SearchConfig(), wheel, rail, track, offset, positions, rotations,
-                               args.calls)
+    default, reference = _time(SearchConfig(), wheel, track, positions, rotations, args.calls)
     scaling = []
     for spacing in SPACINGS:
-        entry, result = _time(SearchConfig(strip_spacing=spacing), wheel, rail, track, offset,
-                              positions, rotations, args.calls)
+        entry, result = _time(SearchConfig(strip_spacing=spacing), wheel, track, positions,
+                              rotations, args.calls)
         # contact position against the finest default-independent run: spacing effect
         entry["max_y_wheel_change_vs_1mm_um"] = round(1e6 * float(np.max(np.where(
             np.asarray(reference.active) & np.asarray(result.active),

@@ -19,7 +19,6 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
-from jaxrail.profiles import uic60  # noqa: E402
 from jaxrail.profiles.analytic import conical_wheel  # noqa: E402
 from jaxrail.stability import LinearStability  # noqa: E402
 from jaxrail.track import straight_track  # noqa: E402
@@ -40,8 +39,7 @@ def main():
     args = parser.parse_args()
     names, speeds = NAMES, RANGE
     if args.wheel == "cone":
-        vehicle, params = suspended_wheelset(conical_wheel(0.025, nominal_radius=0.46),
-                                             uic60("1:40"))
+        vehicle, params = suspended_wheelset(conical_wheel(0.025, nominal_radius=0.46))
         names, speeds = NAMES + ("wheel_cone_angle",), CONE_RANGE
     else:
         vehicle, params = suspended_wheelset()

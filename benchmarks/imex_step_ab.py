@@ -67,8 +67,7 @@ def main():
     earlier = module_at(args.against)
     scenario = profile.load_scenario("paper-curve")
     vehicle, params, track = scenario.build()
-    table, _ = profile.contact_table(params.wheel, params.rail, params.rail_offset,
-                                     vehicle.config)
+    table, _ = profile.contact_table(params.wheel, track.rails, vehicle.config)
     start = jax.jit(lambda p, t: profile.initial_state(
         vehicle, p, t, scenario.speed, scenario.misalignment))(params, track)
     q, qdot = start.q, start.qdot

@@ -43,7 +43,7 @@ def one_after_another(scenario, built, drawn, duration, contact, count=None):
 
     vehicle, params, track = built
     options = scenario.solver_options(duration=duration)
-    model = scenario.contact_model(vehicle, params, contact)
+    model = scenario.contact_model(vehicle, params, track, contact)
     one = jax.jit(lambda v, m: solve(vehicle, params, track, duration, v, m,
                                      options=options, contact_model=model))
     start = time.perf_counter()

@@ -80,7 +80,7 @@ def main():
     built = scenario.build()
     # the contact model built (in table mode the table, built or read) so that its cost
     # is reported apart; each run below reads the table again from the disk cache
-    scenario.contact_model(*built[:2], args.contact)
+    scenario.contact_model(*built, args.contact)
     report["build_s"] = time.perf_counter() - t0
     options = scenario.solver_options(duration=args.duration)
     steps = (round(args.duration / options.fixed_step) if options.fixed_step else None)

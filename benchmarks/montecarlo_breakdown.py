@@ -55,7 +55,7 @@ def main():
     args = parser.parse_args()
     scenario = load_scenario(args.scenario)
     vehicle, params, track = scenario.build()
-    model = scenario.contact_model(vehicle, params, args.contact, True)
+    model = scenario.contact_model(vehicle, params, track, args.contact, True)
     options = scenario.solver_options()
     if options.fixed_step is None:
         raise SystemExit(f"{args.scenario}: needs a scenario with fixed steps")

@@ -42,10 +42,10 @@ def main():
     args = parser.parse_args()
     low, high = speed_range(args.speeds)
     scenario = load_scenario(args.scenario)
-    vehicle, params, _ = scenario.build()
+    vehicle, params, built = scenario.build()
     length = 100.0 + high * (args.hold + (high - low) / (0.5 * args.rate))
-    track = straight_track(length)
-    model = contact_model(args.contact, vehicle, params, progress=True)
+    track = straight_track(length, rails=built.rails)
+    model = contact_model(args.contact, vehicle, params, track, progress=True)
     options = SolverOptions(rtol=scenario.rtol, atol=scenario.atol, integrator="imex")
     out = {"scenario": args.scenario, "vehicle": vehicle.name, "contact": args.contact,
            "speeds_m_s": [low, high], "load_average_start": os.getloadavg()[0]}

@@ -155,7 +155,7 @@ def _compile_only(name, track, contact, integrator, support, duration):
     duration = scenario.duration if duration is None else duration
     result = simulate(vehicle, params, track, 1e-3, scenario.speed, scenario.misalignment,
                       options=scenario.solver_options(duration),
-                      contact_model=scenario.contact_model(vehicle, params, contact))
+                      contact_model=scenario.contact_model(vehicle, params, track, contact))
     return {"compile_time_s": float(result.compile_time_s), "status": result.status}
 
 

@@ -245,8 +245,7 @@ def main():
         _options = dict
     scenario = load_scenario(args.scenario)
     vehicle, params, track = scenario.build()
-    table, table_info = contact_table(params.wheel, params.rail, params.rail_offset,
-                                      vehicle.config, progress=True)
+    table, table_info = contact_table(params.wheel, track.rails, vehicle.config, progress=True)
     models = {"online": OnlineContact(), "table": TableContact(table)}
     results, ratios = {}, {"online_over_table": {}, "flexible_over_rigid": {}}
     for support in args.supports:

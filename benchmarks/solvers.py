@@ -21,7 +21,7 @@ enable_float64()
 
 from jaxrail.simulation import SolverOptions, simulate  # noqa: E402
 from jaxrail.track import straight_track  # noqa: E402
-from jaxrail.profiles import s1002, uic60  # noqa: E402
+from jaxrail.profiles import s1002  # noqa: E402
 from jaxrail.vehicles import single_wheelset, trailer  # noqa: E402
 
 
@@ -34,7 +34,7 @@ def main():
     parser.add_argument("--vehicle", choices=("trailer", "single-wheelset"), default="trailer")
     args = parser.parse_args()
     vehicle, params = (trailer() if args.vehicle == "trailer"
-                       else single_wheelset(s1002(), uic60("1:40")))
+                       else single_wheelset(s1002()))
     track = straight_track(100.0)
     options = SolverOptions(rtol=args.rtol, atol=args.rtol * 1e-3, n_outputs=3)
     runs = []

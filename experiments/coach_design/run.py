@@ -65,8 +65,9 @@ class Study:
         vehicle, params = vehicle_from_file("coach")
         params = eqx.tree_at(lambda p: p.contact.friction, params, FRICTION)
         self.vehicle, self.params = vehicle, params
-        self.model = contact_model("table", vehicle, params, progress=True)
-        self.stability = LinearStability(vehicle, params, straight_track(3000.0), self.model)
+        straight = straight_track(3000.0)  # the standard rails, as the arc's
+        self.model = contact_model("table", vehicle, params, straight, progress=True)
+        self.stability = LinearStability(vehicle, params, straight, self.model)
         arc = Track.from_segments([Arc(3000.0, RADIUS, "left", cant=CANT)])
         self.wear = CurvingWear(SteadyCurving(vehicle, params, arc, self.model), NAMES)
         self.shipped = np.asarray(get_values(vehicle, params, NAMES))

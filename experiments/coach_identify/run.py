@@ -52,7 +52,7 @@ def main():
     start = time.perf_counter()
     scenario = dataclasses.replace(load_scenario(SCENARIO), duration=args.duration)
     vehicle, params, track = scenario.build()
-    model = contact_model("table", vehicle, params, progress=True)
+    model = contact_model("table", vehicle, params, track, progress=True)
     truth = float(get_values(vehicle, params, [NAME])[0])
     times = np.linspace(0.0, args.duration, int(round(args.duration * SAMPLE_RATE)) + 1)
     values = np.asarray(jax.jit(lambda p: simulate_channels(

@@ -57,7 +57,7 @@ def coach():
     contact table."""
     scenario = parse_scenario(SCENARIO, "coach-straight")
     vehicle, params, track = scenario.build()
-    return scenario, vehicle, params, track, contact_model("table", vehicle, params)
+    return scenario, vehicle, params, track, contact_model("table", vehicle, params, track)
 
 
 def linear(stability, params, points=8):

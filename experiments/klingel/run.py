@@ -24,17 +24,15 @@ def main():
     parser.add_argument("--offset", type=float, default=2e-3, help="initial lateral offset [m]")
     args = parser.parse_args()
     jaxrail.enable_float64()
-    from jaxrail.profiles import rail_offset, uic60
     from jaxrail.profiles.analytic import conical_wheel
     from jaxrail.track import straight_track
     from jaxrail.simulation import simulate_single_wheelset
 
-    wheel, rail = conical_wheel(args.cone), uic60("1:40")
-    track = straight_track(args.distance + 30.0)
+    wheel = conical_wheel(args.cone)
+    track = straight_track(args.distance + 30.0)  # UIC60 1:40 at 1.435 m
     t1 = args.distance / args.speed
     start = time.perf_counter()
-    result, (_, patches) = simulate_single_wheelset(wheel, rail, track, rail_offset(rail),
-                                                    args.speed, args.offset, t1,
+    result, (_, patches) = simulate_single_wheelset(wheel, track, args.speed, args.offset, t1,
                                                     n_outputs=int(t1 * 200) + 1)
     wall = time.perf_counter() - start
     q = np.asarray(result.q)

@@ -31,43 +31,42 @@ from jaxrail.contact.table import (Axis, TableGrid, build_contact_table,  # noqa
 from jaxrail.contact.table.build import _node, _pose_on_straight  # noqa: E402
 from jaxrail.geometry import wheelset_geometry  # noqa: E402
 from jaxrail.profiles import s1002, uic60  # noqa: E402
-from jaxrail.profiles.measures import rail_offset  # noqa: E402
-from jaxrail.track import straight_track  # noqa: E402
+from jaxrail.track import Rails, straight_track  # noqa: E402
 
 DEPTH = 6.0e-5  # [m]
 LATERAL, YAW = Axis.span(-0.016, 0.016, 1.0e-4), Axis.span(0.0, 0.0, 1.0)
 
 
-def sweep_poses(wheel, rail, offset):
+def sweep_poses(wheel, rails):
     """(lateral, yaw, roll, side) of each wheel of the quasi-static sweep, (2 n, 4)."""
     shifts = np.arange(-0.008, 0.00801, 2.5e-4)
-    online = wheelset_geometry(wheel, rail, shifts, virtual_penetration=DEPTH)
-    track, poses = straight_track(20.0), []
+    online = wheelset_geometry(wheel, rails.profile, shifts, virtual_penetration=DEPTH)
+    track, poses = straight_track(20.0, rails=rails), []
     for n, shift in enumerate(shifts):
         position, rotation = wheelset_pose(track, 10.0, shift, online.height[n], online.roll[n])
         for side in (1.0, -1.0):
-            lateral, _, yaw, roll, *_ = relative_pose(track, offset, float(wheel.nominal_radius),
+            lateral, _, yaw, roll, *_ = relative_pose(track, float(wheel.nominal_radius),
                                                       position, rotation, side)
             poses.append((float(lateral), float(yaw), float(roll), side))
     return np.array(poses)
 
 
 def main(inclination):
-    wheel, rail = s1002(), uic60(inclination)
-    offset, config = float(rail_offset(rail, 1.435)), SearchConfig()
+    wheel, rails = s1002(), Rails.at_gauge(uic60(inclination), 1.435)
+    offset, config = float(rails.offset), SearchConfig()
     radius = float(wheel.nominal_radius)
-    poses = sweep_poses(wheel, rail, offset)
-    track = straight_track(100.0)
+    poses = sweep_poses(wheel, rails)
+    track = straight_track(100.0, rails=rails)
     search = jax.jit(jax.vmap(lambda lat, yaw, roll, side: _node(
-        wheel, rail, offset, lat, yaw, roll, side, config, radius, (DEPTH,))))
+        wheel, rails.profile, offset, lat, yaw, roll, side, config, radius, (DEPTH,))))
     for step in (0.005, 0.0025):
         grid = TableGrid(LATERAL, YAW, Axis.span(-0.015, 0.015, step))
-        table, _ = build_contact_table(wheel, rail, offset, grid=grid)
+        table, _ = build_contact_table(wheel, rails, grid=grid)
 
         def look(lateral, yaw, roll, side, vertical, table=table):
-            position, rotation = _pose_on_straight(track, offset, radius, lateral, vertical, yaw,
-                                                   roll, side)
-            return table_patches(table, wheel, rail, track, offset, position, rotation, side)
+            position, rotation = _pose_on_straight(track, radius, lateral, vertical, yaw, roll,
+                                                   side)
+            return table_patches(table, wheel, track, position, rotation, side)
 
         for shift in (0.0, step / 4, step / 2):
             lateral, yaw, roll, side = (jnp.asarray(poses[:, k]) for k in range(4))

@@ -28,8 +28,7 @@ from jaxrail.contact.pose import wheelset_pose  # noqa: E402
 from jaxrail.contact.table import Axis, TableGrid, build_contact_table, table_patches  # noqa: E402
 from jaxrail.geometry import wheelset_geometry  # noqa: E402
 from jaxrail.profiles import s1002, uic60  # noqa: E402
-from jaxrail.profiles.measures import rail_offset  # noqa: E402
-from jaxrail.track import straight_track  # noqa: E402
+from jaxrail.track import Rails, straight_track  # noqa: E402
 
 DEPTH = 6.0e-5  # [m]
 STATION, LENGTH = 10.0, 20.0
@@ -58,25 +57,24 @@ def main_field(patches, field):
 
 
 def main(inclination, names):
-    wheel, rail = s1002(), uic60(inclination)
-    offset = float(rail_offset(rail, 1.435))
+    wheel, rails = s1002(), Rails.at_gauge(uic60(inclination), 1.435)
     shifts = np.arange(-0.008, 0.00801, 2.5e-4)
-    online = wheelset_geometry(wheel, rail, shifts, virtual_penetration=DEPTH)
+    online = wheelset_geometry(wheel, rails.profile, shifts, virtual_penetration=DEPTH)
     y_online = np.asarray(online.main_patch("y_wheel"))
     step = np.abs(np.diff(y_online, axis=0))
     inner = (step[1:] < 5e-4) & (step[:-1] < 5e-4)
     single = np.asarray(online.patches.active).sum(axis=2) == 1
     smooth = np.concatenate([np.zeros((1, 2), bool), inner, np.zeros((1, 2), bool)]) & single
-    track = straight_track(LENGTH)
+    track = straight_track(LENGTH, rails=rails)
     for name in names:
         start = time.perf_counter()
-        table, _ = build_contact_table(wheel, rail, offset, grid=GRIDS[name])
+        table, _ = build_contact_table(wheel, rails, grid=GRIDS[name])
         build = time.perf_counter() - start
 
         def one(shift, height, roll):
             position, rotation = wheelset_pose(track, STATION, shift, height, roll)
-            return jax.vmap(lambda side: table_patches(table, wheel, rail, track, offset,
-                                                       position, rotation, side))(
+            return jax.vmap(lambda side: table_patches(table, wheel, track, position,
+                                                       rotation, side))(
                 jnp.array([1.0, -1.0]))
 
         tabled = jax.jit(jax.vmap(one))(jnp.asarray(shifts), online.height, online.roll)

@@ -26,7 +26,7 @@ import jax.numpy as jnp
 from .._ranges import within
 from ..profiles.analytic import ConicalProfile
 from ..track import Rails
-from .vehicle import Vehicle, VehicleParams
+from .vehicle import VehicleParams
 
 
 @dataclasses.dataclass(frozen=True)
