@@ -43,12 +43,7 @@ LAYERS = (
 
 # Imports that break a rule and are left for now: (importing module, imported module)
 # -> why, and the issue that tracks them.
-KNOWN_EXCEPTIONS: dict[tuple[str, str], str] = {
-    # the private module profiles._base: import Profile and WheelProfile from
-    # jaxrail.profiles instead. Left while contact/search.py is being changed by the
-    # move of the rail profile into the track (issue 53).
-    ("jaxrail.contact.search", "jaxrail.profiles._base"): "issue 53",
-}
+KNOWN_EXCEPTIONS: dict[tuple[str, str], str] = {}
 
 
 def _module_name(path):

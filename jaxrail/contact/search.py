@@ -20,7 +20,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
 from ..compilation import traced_once
-from ..profiles._base import Profile, WheelProfile
+from ..profiles import Profile, WheelProfile
 from ..track.rails import lateral_from_centre, rail_under_wheel, wheel_origin
 from .patches import (SECANT_SPAN, find_patches, overlap_density, refine_maximum, secant_stencil,
                       stencil_curvature, wide_point)

@@ -23,15 +23,19 @@ layout comes back within a few samples' spacing of itself (loops, crossings) the
 nearest sample can belong to the wrong branch: pass ``s_guess`` there.
 """
 
+from typing import TYPE_CHECKING
+
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .geometry import _heading_and_curvature, centreline_position, track_frame
-from .layout import Track
+
+if TYPE_CHECKING:  # layout imports the rails, which project onto the track
+    from .layout import Track
 
 
-def _newton_step(track: Track, point, s):
+def _newton_step(track: "Track", point, s):
     h, kappa = _heading_and_curvature(track, s)
     d = point[:2] - centreline_position(track, s)[:2]
     ch, sh = jnp.cos(h), jnp.sin(h)
@@ -51,7 +55,7 @@ def _as_point(point) -> Float[Array, "3"]:
 
 
 def project(
-    track: Track,
+    track: "Track",
     point: Float[ArrayLike, "3"],
     s_guess: Float[ArrayLike, ""] | None = None,
     iterations: int = 4,
@@ -83,7 +87,7 @@ def project(
 
 
 def to_track_coordinates(
-    track: Track, point: Float[ArrayLike, "3"], s_guess: Float[ArrayLike, ""] | None = None
+    track: "Track", point: Float[ArrayLike, "3"], s_guess: Float[ArrayLike, ""] | None = None
 ) -> tuple[Float[Array, ""], Float[Array, ""], Float[Array, ""]]:
     """Track coordinates ``(s, lateral, vertical)`` [m] of a global ``point`` [m].
 
@@ -98,7 +102,7 @@ def to_track_coordinates(
 
 
 def from_track_coordinates(
-    track: Track,
+    track: "Track",
     s: Float[ArrayLike, ""],
     lateral: Float[ArrayLike, ""],
     vertical: Float[ArrayLike, ""],
