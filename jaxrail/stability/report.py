@@ -9,7 +9,7 @@ import numpy as np
 
 from ..geometry import wheelset_geometry
 from ..geometry.report import conicity_entries
-from ..vehicles import contact_model, get_values
+from ..vehicles import contact_model
 from ..simulation import SolverOptions
 from ..track import Arc, Track, straight_track
 from .critical import LinearStability
@@ -92,8 +92,8 @@ def equivalent_conicity(vehicle, params, track, amplitude=CONICITY_AMPLITUDE_M) 
     """EN 15302 equivalent conicity [-] of the vehicle's wheel on the track's rails at
     their gauge, at ``amplitude`` [m] (integral method on the quasi-static rolling
     radius difference over +-10 mm)."""
-    gauge = float(get_values(vehicle, params, ["track_gauge"], track)[0])
-    geometry = wheelset_geometry(params.wheel, track.rails.profile, _SHIFTS, gauge=gauge)
+    geometry = wheelset_geometry(params.wheel, track.rails.profile, _SHIFTS,
+                                 gauge=float(track.rails.gauge))
     entries = conicity_entries(_SHIFTS, np.asarray(geometry.delta_r),
                                float(params.wheel.nominal_radius), (1e3 * amplitude,))
     return entries[0]["tan_gamma_e"]
