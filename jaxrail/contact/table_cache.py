@@ -39,9 +39,8 @@ def _hash_pytree(digest, tree):
 
 
 def table_key(wheel, rails, config: SearchConfig, grid: TableGrid) -> str:
-    """Hex key of a table: a hash of everything it depends on (the rails' profile and
-    offset hashed apart, in the order of the keys before the rails were the track's, so
-    that the tables cached then are found)."""
+    """Hex key of a table: a hash of everything it depends on, the rails' profile and
+    their offset as two parts (so the keys of tables already cached stay valid)."""
     digest = hashlib.sha256()
     digest.update(f"jaxrail contact table v{TABLE_VERSION} {FIELDS}".encode())
     for part in (wheel, rails.profile, config, grid):
