@@ -21,8 +21,6 @@ is the taping point's plane, :data:`HALF_TAPING_DISTANCE` from the wheelset cent
 (:func:`wheel_origin`).
 """
 
-import functools
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -65,13 +63,19 @@ class Rails(eqx.Module):
         return 2.0 * (self.offset + gauge_point(self.profile))
 
 
-@functools.cache
+_STANDARD: list[Rails] = []  # the standard rails once computed outside any trace
+
+
 def standard_rails() -> Rails:
     """UIC60 inclined 1:40 at standard gauge (1.435 m): the rails of every track unless
-    it is given others (:meth:`jaxrail.track.Track.with_rails`). Computed once, eagerly
-    (also when first asked for inside a trace)."""
-    with jax.ensure_compile_time_eval():
-        return Rails.at_gauge(uic60(STANDARD_INCLINATION), STANDARD_GAUGE)
+    it is given others (:meth:`jaxrail.track.Track.with_rails`). Computed once and kept
+    when first asked for outside a trace (inside one they are traced, and not kept)."""
+    if not _STANDARD:
+        rails = Rails.at_gauge(uic60(STANDARD_INCLINATION), STANDARD_GAUGE)
+        if isinstance(rails.offset, jax.core.Tracer):
+            return rails
+        _STANDARD.append(rails)
+    return _STANDARD[0]
 
 
 def wheel_origin(wheelset_position, wheelset_rotation, side) -> Float[Array, "3"]:
