@@ -69,9 +69,11 @@ _STANDARD: list[Rails] = []  # the standard rails once computed outside any trac
 def standard_rails() -> Rails:
     """UIC60 inclined 1:40 at standard gauge (1.435 m): the rails of every track unless
     it is given others (:meth:`jaxrail.track.Track.with_rails`). Computed once and kept
-    when first asked for outside a trace (inside one they are traced, and not kept)."""
+    when first asked for outside a trace (inside one the offset is traced, and not kept)."""
     if not _STANDARD:
-        rails = Rails.at_gauge(uic60(STANDARD_INCLINATION), STANDARD_GAUGE)
+        with jax.ensure_compile_time_eval():  # the profile's static domain needs values
+            profile = uic60(STANDARD_INCLINATION)
+        rails = Rails.at_gauge(profile, STANDARD_GAUGE)
         if isinstance(rails.offset, jax.core.Tracer):
             return rails
         _STANDARD.append(rails)
