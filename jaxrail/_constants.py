@@ -1,7 +1,7 @@
 """Numbers and names that several modules share, each written once.
 
 This module imports nothing, so the command line's ``--help`` can list
-:data:`CONTACT_MODELS` without importing the vehicle models.
+:data:`CONTACT_MODELS` and :data:`INTEGRATORS` without importing the vehicle models.
 """
 
 GRAVITY = 9.81
@@ -18,3 +18,7 @@ STEEL_POISSON = 0.28
 CONTACT_MODELS = ("online", "table")
 """The contact models (:func:`jaxrail.vehicles.contact_model`): the search at every
 evaluation (online) or its table, built once and cached."""
+
+INTEGRATORS = ("tsit5", "imex")
+"""The integrators of :class:`jaxrail.simulation.SolverOptions`: diffrax's Tsit5
+(explicit) or jaxrail's IMEX (:class:`jaxrail.multibody.imex.IMEX`)."""

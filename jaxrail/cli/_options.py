@@ -4,7 +4,7 @@ added), and the checks and outputs they share."""
 
 import sys
 
-from .._constants import CONTACT_MODELS
+from .._constants import CONTACT_MODELS, INTEGRATORS
 
 STANDARD_GAUGE_MM = 1435.0
 SCENARIO_HELP = "a built-in scenario or a .toml file"
@@ -74,7 +74,7 @@ def contact_option(parser):
                         help="contact model: the paper's search at every evaluation (online) "
                         "or its table, built once and cached (default: the scenario's "
                         "[contact] mode)")
-    parser.add_argument("--integrator", choices=("tsit5", "imex"),
+    parser.add_argument("--integrator", choices=INTEGRATORS,
                         help="tsit5: explicit; imex: creep and contact stiffness implicit, "
                         "steps about 3 times longer (default: the scenario's [solver] "
                         "integrator)")

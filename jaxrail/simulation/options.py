@@ -7,6 +7,7 @@ import diffrax
 import equinox as eqx
 import jax
 
+from .._constants import INTEGRATORS as INTEGRATORS
 from .._float64 import f64
 from ..multibody.imex import IMEX, check_jacobian_every
 
@@ -20,8 +21,6 @@ class DerailmentLimits(eqx.Module):
     lateral: jax.Array = eqx.field(converter=f64, default=0.035)
     lift: jax.Array = eqx.field(converter=f64, default=0.025)
 
-
-INTEGRATORS = ("tsit5", "imex")
 
 
 @dataclasses.dataclass(frozen=True)

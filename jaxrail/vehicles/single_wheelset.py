@@ -15,6 +15,7 @@ scenarios build) is :func:`single_wheelset` with S1002 wheels, number for number
 import jax
 import jax.numpy as jnp
 
+from .._constants import GRAVITY
 from ..contact.pose import wheelset_pose
 from ..contact.search import SearchConfig, search_wheelset
 from ..multibody import RigidBody, build_system
@@ -43,7 +44,7 @@ def single_wheelset(wheel, contact=None, config=SearchConfig()):
     :func:`jaxrail.simulation.simulate`: ``(Vehicle, VehicleParams)``."""
     contact = ContactParameters() if contact is None else contact
     system, params = build_system([RigidBody("wheelset", WHEELSET_MASS, WHEELSET_INERTIA)], [],
-                                  [], gravity=(0.0, 0.0, -9.81))
+                                  [], gravity=(0.0, 0.0, -GRAVITY))
     layout = jnp.stack([0.0, 0.0, wheel.nominal_radius])[None, :]
     return (Vehicle("single wheelset", system, (0,), config),
             VehicleParams(params, contact, wheel, layout))
