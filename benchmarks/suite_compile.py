@@ -57,7 +57,7 @@ def summarise(reports, top=30):
 
 
 def run_suite(tree: Path, pytest_args, out: Path):
-    cache = Path(tempfile.mkdtemp(prefix="suite-cache-"))
+    cache = out.parent / "cache"  # empty, and removed with the scratch folder
     env = dict(os.environ, SUITE_COMPILE_OUT=str(out), JAXRAIL_CACHE_DIR=str(cache),
                JAX_COMPILATION_CACHE_DIR=str(cache / "xla"),
                PYTHONPATH=os.pathsep.join([str(tree), str(SITE)]))
