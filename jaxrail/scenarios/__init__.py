@@ -26,7 +26,7 @@ from ..profiles.named import named_profile
 from . import checks
 from .irregularities import IrregularitySpec, parse_irregularities
 from ..simulation import INTEGRATORS, SolverOptions, run_span, simulate
-from ..track import STANDARD_GAUGE, Arc, Rails, Straight, Track, Transition
+from ..track import RAIL_KEYS, STANDARD_GAUGE, Arc, Rails, Straight, Track, Transition
 from ..track.flexible import FlexibleTrack
 from ..vehicles import CONTACT_MODELS, contact_model
 from ..vehicles.from_file import vehicle_from_file, vehicle_names
@@ -39,7 +39,6 @@ __all__ = ["BUILTIN", "Scenario", "load_scenario", "parse_scenario", "prepare_sc
 BUILTIN = ("paper-curve", "paper-curve-simplified", "paper-curve-irregular", "straight",
            "straight-irregular", "bogie-curve-entry", "suspended-wheelset",
            "coach-curve-irregular", "wagon-straight-irregular")
-_RAIL_KEYS = ("rail", "inclination", "gauge")  # of [track]: the rails are the track's
 _SEGMENTS = {"straight": (Straight, {"length"}),
              "transition": (Transition, {"length"}),
              "arc": (Arc, {"length", "radius", "direction", "cant"})}
@@ -253,10 +252,10 @@ def _profile_name(vehicle, key, where):
 
 def _no_rails_in_vehicle(vehicle, where):
     """ValueError for the rails' keys in ``[vehicle]``: the rails are the track's."""
-    for key in _RAIL_KEYS if isinstance(vehicle, dict) else ():
+    for key in RAIL_KEYS if isinstance(vehicle, dict) else ():
         if key in vehicle:
             raise ValueError(f"{where}: [vehicle] {key}: the rails belong to the track: give "
-                             f"{key} in [track] (rail, inclination, gauge)")
+                             f"{key} in [track] ({', '.join(RAIL_KEYS)})")
 
 
 def _vehicle_model(vehicle, where):

@@ -30,6 +30,7 @@ from .projection import to_track_coordinates as to_track_coordinates
 from .flexible import FlexibleTrack as FlexibleTrack
 from .rails import HALF_TAPING_DISTANCE as HALF_TAPING_DISTANCE
 from .rails import Rails as Rails
+from .rails import RAIL_KEYS as RAIL_KEYS
 from .rails import STANDARD_GAUGE as STANDARD_GAUGE
 from .rails import standard_rails as standard_rails
 from .rails import rail_displacement as rail_displacement
@@ -43,6 +44,6 @@ from .rails import wheel_origin as wheel_origin
 __all__ = ["Arc", "FlexibleTrack", "cant_angle", "centreline_position", "CHANNELS", "curvature",
            "curve_layout", "from_track_coordinates", "HALF_TAPING_DISTANCE", "heading",
            "Irregularity", "project", "rail_displacement", "rail_frame", "rail_point",
-           "rail_under_wheel", "Rails", "STANDARD_GAUGE", "standard_rails", "Straight",
+           "rail_under_wheel", "RAIL_KEYS", "Rails", "STANDARD_GAUGE", "standard_rails", "Straight",
            "straight_track", "superelevation", "to_track_coordinates", "Track", "track_frame",
            "track_irregularity", "Transition", "wheel_height", "wheel_origin"]

@@ -33,6 +33,9 @@ from .projection import project
 HALF_TAPING_DISTANCE = 0.75  # [m] taping lines 1500 mm apart (back-to-back 1360 mm)
 STANDARD_GAUGE = 1.435  # [m]
 STANDARD_INCLINATION = "1:40"  # of the standard UIC60 rail
+# a scenario's [track] keys that make the rails (jaxrail.scenarios): a vehicle file or a
+# scenario's [vehicle] that gives one is refused, the rails being the track's
+RAIL_KEYS = ("rail", "inclination", "gauge")
 
 
 class Rails(eqx.Module):

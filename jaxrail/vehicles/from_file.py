@@ -18,6 +18,7 @@ from .._constants import GRAVITY
 from ..contact.search import SearchConfig
 from ..multibody import RigidBody, build_system
 from ..multibody import forces as fc
+from ..track import RAIL_KEYS
 from . import element_kinds as ek
 from .load_path import check_supported, static_loads
 from .quantities import check_dimension, file_error, read_number
@@ -27,7 +28,6 @@ from .wheel_rail import ContactParameters
 from .wheels import wheel_profile
 
 VEHICLE_KEYS = ("name", "description", "gravity")
-TRACK_KEYS = ("rail", "gauge")  # the rails are the track's: a scenario's [track]
 
 
 def vehicle_names() -> list[str]:
@@ -115,10 +115,10 @@ def vehicle_from_data(data: dict, where: str = "<data>", folder=None, *, wheel=N
 def _vehicle_table(model) -> dict:
     table = model.vehicle
     for key in table:
-        if key in TRACK_KEYS:
+        if key in RAIL_KEYS:
             raise file_error(model.where, "vehicle", key, "the rail profile and the gauge "
                              "belong to the track now: give them in the scenario's [track] "
-                             "(rail, inclination, gauge), or in Python to "
+                             f"({', '.join(RAIL_KEYS)}), or in Python to "
                              "Track.with_rails(Rails.at_gauge(profile, gauge))")
         if key not in VEHICLE_KEYS:
             raise file_error(model.where, "vehicle", key, f"unknown key; known: "
