@@ -40,7 +40,7 @@ LATERAL, YAW = Axis.span(-0.016, 0.016, 1.0e-4), Axis.span(0.0, 0.0, 1.0)
 def sweep_poses(wheel, rails):
     """(lateral, yaw, roll, side) of each wheel of the quasi-static sweep, (2 n, 4)."""
     shifts = np.arange(-0.008, 0.00801, 2.5e-4)
-    online = wheelset_geometry(wheel, rails.profile, shifts, virtual_penetration=DEPTH)
+    online = wheelset_geometry(wheel, rails, shifts, virtual_penetration=DEPTH)
     track, poses = straight_track(20.0, rails=rails), []
     for n, shift in enumerate(shifts):
         position, rotation = wheelset_pose(track, 10.0, shift, online.height[n], online.roll[n])

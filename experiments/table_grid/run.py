@@ -59,7 +59,7 @@ def main_field(patches, field):
 def main(inclination, names):
     wheel, rails = s1002(), Rails.at_gauge(uic60(inclination), 1.435)
     shifts = np.arange(-0.008, 0.00801, 2.5e-4)
-    online = wheelset_geometry(wheel, rails.profile, shifts, virtual_penetration=DEPTH)
+    online = wheelset_geometry(wheel, rails, shifts, virtual_penetration=DEPTH)
     y_online = np.asarray(online.main_patch("y_wheel"))
     step = np.abs(np.diff(y_online, axis=0))
     inner = (step[1:] < 5e-4) & (step[:-1] < 5e-4)

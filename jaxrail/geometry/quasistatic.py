@@ -54,17 +54,17 @@ class WheelsetGeometry(eqx.Module):
 
 
 @jax.jit
-def wheelset_geometry(wheel, rail, shifts, gauge=1.435, yaw_per_shift=0.0,
+def wheelset_geometry(wheel, rails: Rails, shifts, yaw_per_shift=0.0,
                       virtual_penetration=VIRTUAL_PENETRATION,
                       config: SearchConfig = SearchConfig()):
     """Quasi-static geometry of a wheelset shifted across straight track.
 
     Arguments:
-        wheel, rail: :class:`WheelProfile` and rail :class:`Profile` (both rails, at
-            ``gauge``: :meth:`jaxrail.track.Rails.at_gauge`).
+        wheel: the :class:`WheelProfile` of both wheels.
+        rails: the track's :class:`~jaxrail.track.Rails` (their profile and offset, which
+            sets the gauge: :meth:`~jaxrail.track.Rails.at_gauge`).
         shifts: lateral shifts [m], shape (n,), positive to the left; solved in order,
             each from the previous solution (give them sorted).
-        gauge: track gauge [m] measured 14 mm below the rail top.
         yaw_per_shift: yaw [rad] per metre of shift (0 for the usual analysis).
         virtual_penetration: depth [m] each wheel is pressed into its rail; patches
             are the strips penetrating at that depth (1e-6 m = 0.001 mm by default, far
@@ -75,7 +75,7 @@ def wheelset_geometry(wheel, rail, shifts, gauge=1.435, yaw_per_shift=0.0,
     one compilation.
     """
     shifts = jnp.asarray(shifts, dtype=jnp.float64)
-    track = straight_track(_TRACK_LENGTH, rails=Rails.at_gauge(rail, gauge))
+    track = straight_track(_TRACK_LENGTH, rails=rails)
 
     def pose(shift, height, roll):
         return wheelset_pose(track, _STATION, shift, height, roll, yaw_per_shift * shift)

@@ -15,6 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._files import write_text as write_text
+from ..track import Rails
 from .conicity import equivalent_conicity
 from .quasistatic import VIRTUAL_PENETRATION, wheelset_geometry
 
@@ -128,9 +129,9 @@ def geometry_report(wheel, rail, shifts_mm, gauge_mm=1435.0, yaw_per_shift=0.0, 
     "conicity"}`` and the :class:`WheelsetGeometry`.
     """
     shifts_m = 1e-3 * np.asarray(shifts_mm, dtype=np.float64)
-    result = wheelset_geometry(wheel, rail, jnp.asarray(shifts_m),
-                       jnp.asarray(1e-3 * gauge_mm, dtype=jnp.float64),
-                       jnp.asarray(yaw_per_shift, dtype=jnp.float64))
+    rails = Rails.at_gauge(rail, jnp.asarray(1e-3 * gauge_mm, dtype=jnp.float64))
+    result = wheelset_geometry(wheel, rails, jnp.asarray(shifts_m),
+                               jnp.asarray(yaw_per_shift, dtype=jnp.float64))
     report = {
         "settings": dict(settings or {}),
         "rows": geometry_rows(result),

@@ -92,8 +92,7 @@ def equivalent_conicity(vehicle, params, track, amplitude=CONICITY_AMPLITUDE_M) 
     """EN 15302 equivalent conicity [-] of the vehicle's wheel on the track's rails at
     their gauge, at ``amplitude`` [m] (integral method on the quasi-static rolling
     radius difference over +-10 mm)."""
-    geometry = wheelset_geometry(params.wheel, track.rails.profile, _SHIFTS,
-                                 gauge=float(track.rails.gauge))
+    geometry = wheelset_geometry(params.wheel, track.rails, _SHIFTS)
     entries = conicity_entries(_SHIFTS, np.asarray(geometry.delta_r),
                                float(params.wheel.nominal_radius), (1e3 * amplitude,))
     return entries[0]["tan_gamma_e"]

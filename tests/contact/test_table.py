@@ -26,7 +26,7 @@ def geometry_case(request):
     wheel, rails = s1002(), Rails.at_gauge(uic60(request.param), 1.435)
     table, diagnostics = build_contact_table(wheel, rails, grid=GRID)
     shifts = np.arange(-0.008, 0.00801, 2.5e-4)
-    online = wheelset_geometry(wheel, rails.profile, shifts, virtual_penetration=DEPTH)
+    online = wheelset_geometry(wheel, rails, shifts, virtual_penetration=DEPTH)
     return wheel, rails, table, diagnostics, shifts, online
 
 

@@ -11,6 +11,7 @@ from jaxrail.geometry import equivalent_conicity, wheelset_geometry
 from jaxrail.profiles import s1002, simplified_s1002
 from jaxrail.profiles.uic60 import uic60
 from jaxrail.profiles.measures import rail_offset
+from jaxrail.track import Rails
 
 SHIFTS = np.round(np.arange(-10.0, 10.001, 0.5), 6) * 1e-3
 
@@ -18,8 +19,8 @@ SHIFTS = np.round(np.arange(-10.0, 10.001, 0.5), 6) * 1e-3
 def geometry(wheel, rail, shifts):
     """The jitted entry point, called as the CLI calls it (41 shifts, float64 gauge and
     yaw rate), so that the tests and the CLI tests share one compilation per wheel."""
-    return wheelset_geometry(wheel, rail, shifts, jnp.asarray(1.435, dtype=jnp.float64),
-                             jnp.asarray(0.0, dtype=jnp.float64))
+    return wheelset_geometry(wheel, Rails.at_gauge(rail, jnp.asarray(1.435, dtype=jnp.float64)),
+                             shifts, jnp.asarray(0.0, dtype=jnp.float64))
 
 
 
