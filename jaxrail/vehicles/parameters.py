@@ -241,20 +241,23 @@ def get_values(vehicle, params, names, track=None) -> jnp.ndarray:
 def set_values(vehicle, params, names, values) -> VehicleParams:
     """``params`` with the named parameters set to ``values`` (k,) (traced); ValueError
     for a track's parameter (:func:`set_values_and_track` writes those)."""
-    for name in names:
-        if parameter(name, vehicle, params).on != "vehicle":
-            raise ValueError(f"{name} is the track's: set it with set_values_and_track("
-                             f"vehicle, params, track, names, values)")
-    return set_values_and_track(vehicle, params, None, names, values)[0]
+    return _set_values(vehicle, params, None, names, values, track_allowed=False)[0]
 
 
 def set_values_and_track(vehicle, params, track, names, values):
     """``(params, track)`` with the named parameters, the vehicle's and the track's
     (``track_gauge``), set to ``values`` (k,) (traced)."""
+    return _set_values(vehicle, params, track, names, values, track_allowed=True)
+
+
+def _set_values(vehicle, params, track, names, values, track_allowed):
     for k, name in enumerate(names):
         p = parameter(name, vehicle, params)
         if p.on == "vehicle":
             params = p.set(vehicle, params, values[k])
-        else:
+        elif track_allowed:
             track = p.set(track, values[k])
+        else:
+            raise ValueError(f"{name} is the track's: set it with set_values_and_track("
+                             f"vehicle, params, track, names, values)")
     return params, track
