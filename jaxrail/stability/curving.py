@@ -275,15 +275,20 @@ class SteadyCurving:
                 break
         return u, r, iteration
 
-    def _settle(self, speed, params, track):
+    def _settle(self, speed, params, track, base: SteadyMotion):
         """``(q, qdot)`` after :data:`SETTLE_S` s of running round the arc from the rest
-        pose at ``speed`` [m/s] (IMEX; the vehicle coasts: the curving resistance slows
-        it by a few mm/s)."""
+        pose ``base`` at ``speed`` [m/s] (IMEX; the vehicle coasts: the curving resistance
+        slows it by a few mm/s)."""
         from ..simulation import SolverOptions, solve
 
         # the traceable core under jit (not simulate()'s exported, cached programs: the
-        # programs traced above may hold host callbacks an export cannot carry)
-        result = eqx.filter_jit(solve)(self.vehicle, params, track, SETTLE_S, speed,
+        # programs traced above may hold host callbacks an export cannot carry), started
+        # from the rest pose already solved, with the duration and the speed traced: one
+        # program for every speed, and the one a run started from a curving state uses
+        qdot = velocities_from_twists(base.q, base.velocity, base.angular_velocity)
+        result = eqx.filter_jit(solve)(self.vehicle, params, track,
+                                       jnp.asarray(SETTLE_S, jnp.float64),
+                                       jnp.asarray(speed, jnp.float64), initial=(base.q, qdot),
                                        options=SolverOptions(integrator="imex"),
                                        contact_model=self.model)
         if result.status != "successful":
@@ -321,7 +326,7 @@ class SteadyCurving:
         u, r, iteration = self._newton(u, params, track, setup_values)
         if not np.max(np.abs(r[:6 * n])) < RESIDUAL_TOLERANCE:
             # settle by a simulation from the rest pose, then Newton from where it went
-            q, qdot = self._settle(speed, params, track)
+            q, qdot = self._settle(speed, params, track, setup_values[0])
             u = unknowns_of_state(q, qdot, setup_values[0], np.asarray(self.vehicle.wheelsets),
                                   setup_values[2], held_body(self.vehicle))
             u, r, more = self._newton(u, params, track, setup_values)

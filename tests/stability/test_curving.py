@@ -106,9 +106,11 @@ def test_a_simulation_started_in_the_steady_curving_state_stays_in_it(curving):
     s = state.steady
     qdot = velocities_from_twists(s.q, s.velocity, s.angular_velocity)
     # the traceable core under jit: this process's earlier programs may hold host
-    # callbacks that the exported programs of simulate() cannot carry
-    result = eqx.filter_jit(solve)(vehicle, params, track, 1.0, SPEED, initial=(s.q, qdot),
-                                   options=SolverOptions(integrator="imex"))
+    # callbacks that the exported programs of simulate() cannot carry; duration and speed
+    # traced, as SteadyCurving's settling run calls it: one program for both
+    result = eqx.filter_jit(solve)(vehicle, params, track, jnp.float64(1.0), jnp.float64(SPEED),
+                                   initial=(s.q, qdot), options=SolverOptions(integrator="imex"),
+                                   contact_model=steady.model)
     assert result.status == "successful"
     lateral = np.asarray(result.wheelset_lateral)[:, 0]
     yaw = np.asarray(result.wheelset_yaw)[:, 0]
