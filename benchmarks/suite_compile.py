@@ -32,10 +32,39 @@ def _summed(reports):
     tests = defaultdict(lambda: dict.fromkeys(FIELDS, 0.0))
     for lines in reports:
         for test, field, seconds in lines:
+            if field == "program":
+                continue
             tests[test][field] += seconds
             if field == "compile_s":
                 tests[test]["programs"] += 1
     return tests
+
+
+def repeated_programs(reports, top=30):
+    """Programs (JAX's persistent-cache keys) that the run compiled more than once, in
+    one process or several: ``repeated_s``, the seconds of every compile of a key but
+    its first (what sharing identical programs would save), and the costliest ones
+    with the tests that compiled them."""
+    compiles = defaultdict(list)
+    for lines in reports:
+        for test, field, value in lines:
+            if field == "program":
+                key, name, seconds = value
+                compiles[key].append((seconds, name, test))
+    repeated = []
+    for key, seen in compiles.items():
+        if len(seen) > 1:
+            extra = sum(s for s, _, _ in seen) - seen[0][0]
+            repeated.append((extra, seen))
+    repeated.sort(key=lambda item: -item[0])
+    return {"keyed_programs": sum(len(seen) for seen in compiles.values()),
+            "distinct_programs": len(compiles),
+            "keyed_compile_s": round(sum(s for seen in compiles.values() for s, _, _ in seen), 1),
+            "repeated_s": round(sum(extra for extra, _ in repeated), 1),
+            "most_repeated": [{"repeated_s": round(extra, 2), "module": seen[0][1],
+                               "compiles": len(seen),
+                               "tests": sorted({test for _, _, test in seen})}
+                              for extra, seen in repeated[:top]]}
 
 
 def summarise(reports, top=30):
@@ -53,7 +82,8 @@ def summarise(reports, top=30):
         return [{"name": name, **{f: round(v, 2) for f, v in entry.items()}}
                 for name, entry in rows]
     return {"total": {f: round(v, 1) for f, v in total.items()},
-            "processes": len(reports), "files": ranked(files), "tests": ranked(tests)}
+            "processes": len(reports), "files": ranked(files), "tests": ranked(tests),
+            "repeated": repeated_programs(reports, top)}
 
 
 def run_suite(tree: Path, pytest_args, out: Path):

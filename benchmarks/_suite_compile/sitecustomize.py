@@ -12,6 +12,11 @@ busy meanwhile), each under the test running at that moment (``$PYTEST_CURRENT_T
 which pytest sets and child processes inherit), appended as they come to
 ``$SUITE_COMPILE_OUT/<pid>.jsonl``, one ``[test, field, seconds]`` line each: pytest-xdist's
 workers end without running ``atexit``, so nothing waits for the process's end.
+
+Each compile that goes through JAX's persistent cache also writes
+``[test, "program", [cache key, module name, seconds]]``: the key is JAX's own (the
+program, its compile options, the backend), so a key compiled twice in the run is one
+program compiled twice, however it was reached.
 """
 
 import functools
@@ -54,6 +59,19 @@ def _install(out: Path):
             record("compile_cpu_s", time.process_time() - start)
 
     compiler.backend_compile_and_load = timed_backend_compile
+    compile_and_write = compiler._compile_and_write_cache
+
+    @functools.wraps(compile_and_write)
+    def keyed_compile(backend, computation, devices, options, callbacks, module_name,
+                      cache_key):
+        start = time.perf_counter()
+        try:
+            return compile_and_write(backend, computation, devices, options, callbacks,
+                                     module_name, cache_key)
+        finally:
+            record("program", [cache_key, module_name, time.perf_counter() - start])
+
+    compiler._compile_and_write_cache = keyed_compile
 
 
 if os.environ.get("SUITE_COMPILE_OUT"):
