@@ -9,6 +9,11 @@ that become thunks: those of every computation except the bodies of fusions, les
 ones that produce no work (parameters, constants, tuples, their elements, bitcasts).
 It is a static count: the body of an inner loop counts once, however many times it
 runs.
+
+:func:`element_counts` counts the work inside those kernels: the elements each
+instruction of the optimised module writes, fused or not, split into arithmetic
+(everything that computes a new value) and data movement (copies, transposes,
+concatenations, broadcasts, slices, gathers and the like, which only place values).
 """
 
 import collections
@@ -19,6 +24,18 @@ _NO_WORK = frozenset({"parameter", "constant", "get-tuple-element", "tuple", "bi
 _INSTRUCTION = re.compile(
     r"^\s*(?:ROOT\s+)?%?[\w.\-]+\s*=\s*(?:\([^=]*?\)|\S+)\s+([a-z][\w\-]*)\(")
 _FUSED = re.compile(r"\bcalls=%?([\w.\-]+)")
+_RESULT = re.compile(r"=\s*(\([^=]*?\)|\S+)\s+[a-z][\w\-]*\(")
+_ARRAY = re.compile(r"\b[a-z]+\d*\[([\d,]*)\]")
+_NAMED = re.compile(r"^\s*(?:ROOT\s+)?%?([\w.\-]+)\s*=")
+_OPERANDS = re.compile(r"%([\w.\-]+)")
+_APPLIED = re.compile(r"\bto_apply=%?([\w.\-]+)")
+_CONTRACTED = re.compile(r"lhs_contracting_dims=\{([\d,]*)\}")
+# opcodes that place values without computing new ones
+DATA_MOVEMENT = frozenset({"broadcast", "concatenate", "copy", "dynamic-slice",
+                           "dynamic-update-slice", "gather", "iota", "pad", "reshape",
+                           "reverse", "scatter", "slice", "transpose"})
+# opcodes that write no elements of their own (calls, loops, fusions: their bodies count)
+_CONTAINERS = _NO_WORK | {"fusion", "while", "conditional", "call", "custom-call"}
 
 
 def _computations(hlo_text: str) -> dict[str, list[tuple[str, str]]]:
@@ -48,3 +65,55 @@ def operation_counts(compiled) -> dict:
                                 if name not in fused for opcode, _ in instructions
                                 if opcode not in _NO_WORK)
     return {"operations": sum(kinds.values()), "by_kind": dict(kinds.most_common())}
+
+
+def _shapes(text: str) -> list[list[int]]:
+    """The dimensions of each array in a result type (one, or a tuple's)."""
+    return [[int(d) for d in filter(None, dims.split(","))] for dims in _ARRAY.findall(text)]
+
+
+def _size(dims) -> int:
+    size = 1
+    for d in dims:
+        size *= d
+    return size
+
+
+def element_counts(compiled) -> dict:
+    """``{"arithmetic": n, "data_movement": n, "by_kind": {opcode: n}}``: the element
+    operations of a compiled JAX program's optimised HLO, inside fused kernels too
+    (module docstring): the elements each instruction writes, a reduction the elements
+    it reads, a dot its multiply-adds; a loop's body counts once. The reducers of
+    reductions are part of those, and custom calls (LAPACK) are not counted: their work
+    is not in the HLO."""
+    computations = _computations(compiled.as_text())
+    reducers = {m.group(1) for instructions in computations.values()
+                for _, line in instructions for m in [_APPLIED.search(line)] if m}
+    dims = {}  # instruction name -> its result's first array's dimensions
+    for instructions in computations.values():
+        for _, line in instructions:
+            name, result = _NAMED.match(line), _RESULT.search(line)
+            if name and result:
+                shapes = _shapes(result.group(1))
+                dims[name.group(1)] = shapes[0] if shapes else []
+    kinds = collections.Counter()
+    for computation, instructions in computations.items():
+        if computation in reducers:
+            continue
+        for opcode, line in instructions:
+            if opcode in _CONTAINERS:
+                continue
+            result = _RESULT.search(line)
+            written = sum(_size(d) for d in _shapes(result.group(1))) if result else 0
+            operands = _OPERANDS.findall(line.split(opcode + "(", 1)[1])
+            if opcode in ("reduce", "reduce-window") and operands:
+                written = max(written, _size(dims.get(operands[0], [])))
+            elif opcode == "dot" and operands:
+                contracted = _CONTRACTED.search(line)
+                lhs = dims.get(operands[0], [])
+                axes = [int(a) for a in contracted.group(1).split(",") if a] if contracted else []
+                written *= _size(lhs[a] for a in axes if a < len(lhs))
+            kinds[opcode] += written
+    moved = sum(n for kind, n in kinds.items() if kind in DATA_MOVEMENT)
+    return {"arithmetic": sum(kinds.values()) - moved, "data_movement": moved,
+            "by_kind": dict(kinds.most_common())}

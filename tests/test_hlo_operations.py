@@ -5,7 +5,7 @@ calls per solve, and the count grows with the number of unfusable operations."""
 import jax
 import jax.numpy as jnp
 
-from jaxrail._hlo_operations import operation_counts
+from jaxrail._hlo_operations import element_counts, operation_counts
 
 
 def _count(function, *args):
@@ -31,3 +31,22 @@ def test_solves_in_a_loop_are_counted_once_each():
     per_solve = one["by_kind"]["custom-call"]
     assert per_solve >= 1 and three["by_kind"]["custom-call"] == 3 * per_solve
     assert three["operations"] > one["operations"]
+
+
+def _elements(function, *args):
+    return element_counts(jax.jit(function).lower(*args).compile())
+
+
+def test_element_operations_against_hand_counts():
+    """Counted by hand: x * y + z on 7 elements is 14 operations and moves nothing; a
+    concatenation of two 5-vectors moves 10 elements; (4 x 3) @ (3 x 4) is 48
+    multiply-adds, and summing a (3, 4) array reads 12 elements."""
+    v = jnp.ones(7)
+    assert _elements(lambda x, y, z: x * y + z, v, v, v) == {
+        "arithmetic": 14, "data_movement": 0, "by_kind": {"multiply": 7, "add": 7}}
+    joined = _elements(lambda x, y: jnp.concatenate([x, y]), jnp.ones(5), jnp.ones(5))
+    assert (joined["arithmetic"], joined["data_movement"]) == (0, 10)
+    a = jnp.ones((3, 4))
+    work = _elements(lambda x: (jnp.sin(x).T @ x, x.sum(0)), a)
+    assert work["by_kind"]["dot"] == 48 and work["by_kind"]["reduce"] == 12
+    assert work["by_kind"]["sine"] == 12
