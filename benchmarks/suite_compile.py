@@ -44,7 +44,8 @@ def repeated_programs(reports, top=30):
     """Programs (JAX's persistent-cache keys) that the run compiled more than once, in
     one process or several: ``repeated_s``, the seconds of every compile of a key but
     its first (what sharing identical programs would save), and the costliest ones
-    with the tests that compiled them."""
+    with the tests that compiled them; and the programs by their compile time
+    (``by_compile_time``: how many took under 0.1 s, 0.1-1 s, ..., and their seconds)."""
     compiles = defaultdict(list)
     for lines in reports:
         for test, field, value in lines:
@@ -57,7 +58,14 @@ def repeated_programs(reports, top=30):
             extra = sum(s for s, _, _ in seen) - seen[0][0]
             repeated.append((extra, seen))
     repeated.sort(key=lambda item: -item[0])
+    seconds = [s for seen in compiles.values() for s, _, _ in seen]
+    bounds = (0.1, 1.0, 10.0, 30.0, float("inf"))
+    by_time = {(f"under_{b:g}_s" if b < bounds[-1] else f"{lo:g}_s_and_over"): {
+        "programs": sum(lo <= s < b for s in seconds),
+        "compile_s": round(sum(s for s in seconds if lo <= s < b), 1)}
+        for lo, b in zip((0.0,) + bounds[:-1], bounds)}
     return {"keyed_programs": sum(len(seen) for seen in compiles.values()),
+            "by_compile_time": by_time,
             "distinct_programs": len(compiles),
             "keyed_compile_s": round(sum(s for seen in compiles.values() for s, _, _ in seen), 1),
             "repeated_s": round(sum(extra for extra, _ in repeated), 1),
