@@ -80,15 +80,21 @@ def _size(dims) -> int:
 
 
 def element_counts(compiled) -> dict:
-    """``{"arithmetic": n, "data_movement": n, "by_kind": {opcode: n}}``: the element
-    operations of a compiled JAX program's optimised HLO, inside fused kernels too
-    (module docstring): the elements each instruction writes, a reduction the elements
-    it reads, a dot its multiply-adds; a loop's body counts once. The reducers of
-    reductions are part of those, and custom calls (LAPACK) are not counted: their work
-    is not in the HLO."""
+    """``{"arithmetic": n, "data_movement": n, "remapped_in_fusions": n, "by_kind":
+    {opcode: n}}``: the element operations of a compiled JAX program's optimised HLO,
+    inside fused kernels too (module docstring): the elements each instruction writes,
+    a reduction the elements it reads, a dot its multiply-adds; a loop's body counts
+    once. ``data_movement`` counts the moves that write memory: unfused ones and those
+    a fused kernel writes out (its root); inside a kernel a broadcast, slice or
+    transpose that feeds its arithmetic only changes indices (``remapped_in_fusions``).
+    The reducers of reductions are part of those, and custom calls (LAPACK) are not
+    counted: their work is not in the HLO."""
     computations = _computations(compiled.as_text())
     reducers = {m.group(1) for instructions in computations.values()
                 for _, line in instructions for m in [_APPLIED.search(line)] if m}
+    fused = {m.group(1) for instructions in computations.values()
+             for opcode, line in instructions if opcode == "fusion"
+             for m in [_FUSED.search(line)] if m}
     dims = {}  # instruction name -> its result's first array's dimensions
     for instructions in computations.values():
         for _, line in instructions:
@@ -96,10 +102,16 @@ def element_counts(compiled) -> dict:
             if name and result:
                 shapes = _shapes(result.group(1))
                 dims[name.group(1)] = shapes[0] if shapes else []
-    kinds = collections.Counter()
+    kinds, moved, remapped = collections.Counter(), 0, 0
     for computation, instructions in computations.items():
         if computation in reducers:
             continue
+        written_out = set()  # a fused kernel's outputs: its root, or its root tuple's parts
+        for opcode, line in instructions:
+            if line.lstrip().startswith("ROOT"):
+                written_out.add(_NAMED.match(line).group(1))
+                if opcode == "tuple":
+                    written_out.update(_OPERANDS.findall(line.split("tuple(", 1)[1]))
         for opcode, line in instructions:
             if opcode in _CONTAINERS:
                 continue
@@ -114,6 +126,11 @@ def element_counts(compiled) -> dict:
                 axes = [int(a) for a in contracted.group(1).split(",") if a] if contracted else []
                 written *= _size(lhs[a] for a in axes if a < len(lhs))
             kinds[opcode] += written
-    moved = sum(n for kind, n in kinds.items() if kind in DATA_MOVEMENT)
-    return {"arithmetic": sum(kinds.values()) - moved, "data_movement": moved,
+            if opcode in DATA_MOVEMENT:
+                if computation in fused and _NAMED.match(line).group(1) not in written_out:
+                    remapped += written
+                else:
+                    moved += written
+    arithmetic = sum(n for kind, n in kinds.items() if kind not in DATA_MOVEMENT)
+    return {"arithmetic": arithmetic, "data_movement": moved, "remapped_in_fusions": remapped,
             "by_kind": dict(kinds.most_common())}
