@@ -28,7 +28,17 @@ outside a loop; several times slower for these small programs):
   (``jaxrail._hlo_operations``: fused kernels and unfused operations of the
   optimised HLO, each inner loop's body once), ``force_laws`` the difference of
   ``loads`` and ``contact``; ``us_per_operation``: the time per evaluation over them;
-  ``operations_by_kind``: by HLO opcode.
+  ``operations_by_kind``: by HLO opcode;
+- ``element_operations``: the work inside those operations, per looped program
+  (:func:`jaxrail._hlo_operations.element_counts`: the elements the optimised HLO's
+  instructions write, fused or not, ``arithmetic`` and ``data_movement``, each inner
+  loop's body once), and ``elements_by_kind`` of the right-hand side (the 15 largest).
+
+With ``--kernels``, per contact model the kernels of the right-hand side's and the IMEX
+step's loops as XLA:CPU runs them (:func:`jaxrail._kernel_profile.kernel_profile`: each
+kernel's share of the traced time and its executions per evaluation, the 25 largest):
+``kernels``. The process then runs with XLA's thunk tracing on (it starts itself again
+with the flag).
 
 Each on rigid rails and on the co-moving flexible track (``--supports rigid flexible``,
 its default values, :mod:`jaxrail.track.flexible`): there the loads and the right-hand
@@ -40,7 +50,7 @@ one with the whole vehicle shifted along the global y axis by 0-4 mm), per membe
 Prints one JSON object with an object per track support, each with one per model, and
 ``online_over_table`` and ``flexible_over_rigid`` (whole right-hand sides).
 Usage: ``python benchmarks/rhs_profile.py [--calls 40] [--scenario S] [--batch N]
-[--supports rigid flexible] [--xla-defaults]`` (``--xla-defaults``: every program with
+[--supports rigid flexible] [--xla-defaults] [--kernels]`` (``--xla-defaults``: every program with
 XLA's default options instead of jaxrail's, e.g. on a jaxlib that does not know them).
 """
 
@@ -48,6 +58,7 @@ import argparse
 import json
 import os
 import statistics
+import sys
 import time
 
 import diffrax
@@ -57,7 +68,8 @@ import jax.numpy as jnp
 
 from jaxrail import enable_float64
 from jaxrail.compilation import compiler_options
-from jaxrail._hlo_operations import operation_counts
+from jaxrail._hlo_operations import element_counts, operation_counts
+from jaxrail._kernel_profile import TRACE_FLAG, kernel_profile, tracing_enabled
 
 enable_float64()
 
@@ -122,12 +134,21 @@ def compiled_loop(function, args, repeats=LOOP_REPEATS, options=None):
 def timed_in_loop(function, args, calls, repeats=LOOP_REPEATS, options=None):
     """(median run time [us] of one evaluation of ``function(q, qdot, data)`` inside
     :func:`compiled_loop` (median of ``calls`` runs of the loop), its
-    :func:`operation_counts`)."""
+    :func:`operation_counts`, its :func:`element_counts`, the compiled loop)."""
     compiled = compiled_loop(function, args, repeats, options)
-    return 1e6 * _median_call_s(compiled, args, calls) / repeats, operation_counts(compiled)
+    return (1e6 * _median_call_s(compiled, args, calls) / repeats, operation_counts(compiled),
+            element_counts(compiled), compiled)
 
 
-def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
+def kernels_in_loop(compiled, args, calls, repeats=LOOP_REPEATS):
+    """:func:`kernel_profile` of ``calls`` runs of a :func:`compiled_loop` program."""
+    def run():
+        for _ in range(calls):
+            jax.block_until_ready(compiled(*args))
+    return kernel_profile(run, calls * repeats, top=25)
+
+
+def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch, kernels=False):
     """The JSON object of one contact model. Everything but the structure is traced,
     as in :func:`jaxrail.simulation.simulate` (the profiles, the track, the parameters
     and the contact table are arguments of the compiled program, not constants).
@@ -216,7 +237,14 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch):
         "us_per_operation": {name: round(value[0] / value[1]["operations"], 3)
                              for name, value in looped.items()},
         "operations_by_kind": {name: value[1]["by_kind"] for name, value in looped.items()},
+        "element_operations": {name: {k: value[2][k] for k in ("arithmetic", "data_movement",
+                                                               "remapped_in_fusions")}
+                               for name, value in looped.items()},
+        "elements_by_kind": dict(list(looped["rhs"][2]["by_kind"].items())[:15]),
     }
+    if kernels:
+        out["kernels"] = {name: kernels_in_loop(looped[name][3], args, calls)
+                          for name in ("rhs", "imex_step")}
     out["operations"]["force_laws"] = out["operations"]["loads"] - out["operations"]["contact"]
     if batch:
         shifts = jnp.linspace(0.0, 4e-3, batch)
@@ -236,10 +264,15 @@ def main():
     parser.add_argument("--batch", type=int, default=0, help="members of a vmapped batch")
     parser.add_argument("--supports", nargs="+", default=["rigid", "flexible"],
                         choices=("rigid", "flexible"))
+    parser.add_argument("--kernels", action="store_true",
+                        help="also each kernel's share of the time (XLA's thunk trace)")
     parser.add_argument("--xla-defaults", action="store_true",
                         help="compile every part with XLA's default options, none of "
                              "jaxrail's (e.g. on a jaxlib that does not know them)")
     args = parser.parse_args()
+    if args.kernels and not tracing_enabled():  # the flag is read when the backend starts
+        os.environ["XLA_FLAGS"] = os.environ.get("XLA_FLAGS", "") + " " + TRACE_FLAG
+        os.execv(sys.executable, [sys.executable, *sys.argv])
     if args.xla_defaults:
         global _options
         _options = dict
@@ -253,7 +286,8 @@ def main():
         state = jax.jit(lambda p, t: initial_state(vehicle, p, t, scenario.speed,
                                                    scenario.misalignment))(params, on)
         results[support] = {name: profile_model(model, vehicle, params, on, state.q,
-                                                state.qdot, state.track, args.calls, args.batch)
+                                                state.qdot, state.track, args.calls, args.batch,
+                                                args.kernels)
                             for name, model in models.items()}
         ratios["online_over_table"][support] = round(
             results[support]["online"]["rhs_median_us"]
@@ -269,6 +303,7 @@ def main():
         **results, "table": table, **ratios, "load": os.getloadavg(),
         "jnp_dtype": str(jnp.zeros(1).dtype), "jax": jax.__version__,
         "compiler_options": "xla defaults" if args.xla_defaults else "jaxrail",
+        "thunk_tracing": tracing_enabled(),
     }, indent=2))
 
 
