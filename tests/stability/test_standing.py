@@ -1,12 +1,16 @@
 """The modes of the trailer standing on the track, its wheelsets clamped, against a
 hand-written model of its vertical plane (carbody on the secondary springs and dampers,
-bogies on the primary ones, wheelsets fixed), and its wheel loads at rest."""
+bogies on the primary ones, wheelsets fixed), and its wheel loads at rest; and
+``jaxrail vehicle show trailer``, which reports them from the same programs."""
 
 import copy
+import json
 
+import jax
 import numpy as np
 import pytest
 
+from jaxrail.cli import main
 from jaxrail.stability import vehicle_modes
 from jaxrail.vehicles import trailer_values, vehicle_from_data, vehicle_from_file
 from jaxrail.vehicles.from_file import read_toml, vehicle_file_path
@@ -131,3 +135,38 @@ def test_an_off_centre_carbody_loads_its_left_wheels_by_its_moment(standing):
     assert abs(np.sum(loads) / shifted.weight_n - 1.0) < LOADS
     assert np.all(loads[:, 0] > 1.1 * loads[:, 1])  # left heavier (1.21 times)
     np.testing.assert_allclose(loads, np.tile(loads[0], (4, 1)), rtol=LOADS)  # alike
+
+
+def test_show_reports_the_trailers_masses_wheel_loads_and_modes(standing, tmp_path, capsys):
+    """``jaxrail vehicle show trailer``: the report (JSON keys and values, the figure).
+    It runs here, after the fixture, because it asks for the fixture's two programs
+    (the rest pose and the linearisation at it): the command traces neither again."""
+    traced = []
+
+    def on_trace(event, seconds, **kwargs):
+        if event == "/jax/core/compile/jaxpr_trace_duration":
+            traced.append(kwargs.get("fun_name"))
+
+    report, figure = tmp_path / "trailer.json", tmp_path / "trailer.png"
+    jax.monitoring.register_event_duration_secs_listener(on_trace)
+    try:
+        code = main(["vehicle", "show", "trailer", "--json", str(report), "--plot", str(figure)])
+    finally:
+        jax.monitoring.unregister_event_duration_listener(on_trace)
+    assert code == 0
+    assert not {"_rest", "_linearised"} & set(traced), traced
+    text = capsys.readouterr().out
+    assert "wheel loads at rest" in text and "lower sway" in text
+    data = json.loads(report.read_text())
+    assert {"total_mass_kg", "static_wheel_loads_N", "modes"} <= set(data)
+    assert data["total_mass_kg"] == pytest.approx(32000 + 2 * 2615 + 4 * 1813, rel=1e-12)
+    loads = data["static_wheel_loads_N"]
+    assert len(loads) == 8  # 4 wheelsets, leading first, left then right
+    weight = data["total_mass_kg"] * GRAVITY
+    assert abs(sum(loads) / weight - 1.0) < LOADS
+    np.testing.assert_allclose(loads, weight / 8, rtol=LOADS)
+    for mode in data["modes"]:
+        assert {"frequency_hz", "damping_ratio", "body", "motion"} <= set(mode)
+    bounce = [m for m in data["modes"] if (m["body"], m["motion"]) == ("carbody", "bounce")]
+    assert len(bounce) == 1 and 0.5 < bounce[0]["frequency_hz"] < 2.0
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
