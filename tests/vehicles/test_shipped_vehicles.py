@@ -4,27 +4,25 @@ coach (``coach``) and the two-axle freight wagon with friction damping (``wagon`
 Each builds from its file with every number sourced and tagged, has the element kinds
 its suspension needs, stands at rest on straight track (the static equilibrium of
 :func:`jaxrail.vehicles.initial_state`: wheel loads summing to the weight, left equal
-to right, no body accelerating) and runs 0.2 s of its scenario. One program per vehicle
-for the rest and one for each run keep the compile time down.
+to right, no body accelerating) and runs 0.2 s of its scenario. Two programs per
+vehicle, the run's (rest pose and integration), serve both: the rest is checked with
+them on the scenario's track made ideal.
 """
 
-import dataclasses
 import tomllib
 
 import diffrax
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrail.multibody import accelerations
+from jaxrail.compilation import compile_program
 from jaxrail.multibody.anti_roll_bar import roll_stiffness
 from jaxrail.scenarios import BUILTIN, load_scenario, run_scenario
-from jaxrail.vehicles import (OnlineContact, VehicleLoads, initial_state, vehicle_from_file,
-                              vehicle_names)
+from jaxrail.simulation import simulate
+from jaxrail.vehicles import initial_state, vehicle_from_file, vehicle_names
 from jaxrail.vehicles import element_kinds as ek
-from jaxrail.vehicles.loads import contact_loads, rail_loads
 from jaxrail.vehicles.quantities import TAGS
 from jaxrail.vehicles.load_path import static_loads
 from jaxrail.vehicles.vehicle_file import data_folder, read_vehicle_model
@@ -36,6 +34,8 @@ MASSES = {"coach": 32000.0 + 2 * 2615.0 + 4 * 1813.0,  # the benchmark's bodies 
 WHEELSETS = {"coach": 4, "wagon": 2}
 LOAD_TOLERANCE = 1e-6  # relative: the rest pose's bisections and Newton step
 REST_TOLERANCE = 1e-8  # [m/s^2]: accelerations of the bodies at rest (seen: 1.2e-10)
+RUN = 0.2  # [s] of each scenario
+AT_REST = 0.01  # [s]: the run at rest whose first outputs are the rest's loads
 
 
 def _file(name):
@@ -202,37 +202,45 @@ def test_air_spring_static_preload_and_nominal_length_in_the_loader():
         read_vehicle_model(data, "coach.toml")
 
 
-# ---- at rest on straight track ----------------------------------------------------------
+# ---- 0.2 s of each scenario, and at rest on its track ----------------------------------
 
 
-def _straight_track(name):
-    """The vehicle's scenario's track without its irregularities, straightened."""
-    scenario = load_scenario(SCENARIOS[name])
-    straight = [{"kind": "straight", "length": 300.0}]
-    return dataclasses.replace(scenario, segments=straight, irregularities=None).track()
+@pytest.fixture(scope="module")
+def short_run(shipped):
+    """(scenario, result, vehicle, params, track) of the first 0.2 s of the vehicle's
+    scenario, as ``run_scenario`` runs it (its rest pose and integration compiled)."""
+    scenario = load_scenario(SCENARIOS[shipped[0]])
+    result, vehicle, params, track = run_scenario(scenario, duration=RUN)
+    return scenario, result, vehicle, params, track
 
 
-@eqx.filter_jit
-def _at_rest(vehicle, params, track):
-    """The rest state, each wheel's vertical load on its rail (W, 2) [N] and the bodies'
-    accelerations (n, 7), in one program."""
-    state = initial_state(vehicle, params, track, 0.0, 0.0)
-    _, _, patches, forces = contact_loads(vehicle, params, track, state.q, state.qdot)
-    on_rails = jax.vmap(lambda p, f: rail_loads(track, p, f))(patches, forces)
-    loads = VehicleLoads(vehicle, params, track, OnlineContact(), None)
-    qddot = accelerations(vehicle.system, params.system, 0.0, state.q, state.qdot, loads,
-                          state.elements)[0]
-    return state, -on_rails[..., 1], qddot.reshape(-1, 7)
-
-
-def test_static_equilibrium_at_rest(shipped):
-    name, vehicle, params = shipped
-    track = _straight_track(name)
-    state, wheel_loads, qddot = _at_rest(vehicle, params, track)
+def test_static_equilibrium_at_rest(shipped, short_run):
+    """The rest on the scenario's own track, its irregularity scaled to 0 (the same
+    structure, so the same programs): the vehicle stands on the first straight. The
+    rest state is the run's rest-pose program at speed 0 without misalignment; its
+    wheel loads (the vertical force on each wheel) and accelerations are the first
+    outputs of a run from it, the run's integration program: nothing new compiled."""
+    name = shipped[0]
+    scenario, _, vehicle, params, track = short_run
+    ideal = eqx.tree_at(lambda t: t.irregularity.scale, track, jnp.float64(0.0))
+    model = scenario.contact_model(vehicle, params, ideal)
+    zero = jnp.float64(0.0)
+    rest, seconds = compile_program(initial_state, vehicle, params, ideal, zero, zero, None,
+                                    model)
+    assert seconds == 0.0  # the run's rest pose
+    state = rest(vehicle, params, ideal, zero, zero, None, model)
+    result = simulate(vehicle, params, ideal, AT_REST, 0.0, 0.0,
+                      options=scenario.solver_options(RUN), initial=state,
+                      contact_model=model)
+    assert float(result.compile_time_s) == 0.0  # the run's integration
+    assert bool(result.valid[0])
+    np.testing.assert_array_equal(result.q[0], state.q)  # the first output is the rest
+    wheel_loads = np.asarray(result.wheels.vertical_force[0])  # (W, 2)
+    qddot = np.asarray(result.qddot[0]).reshape(-1, 7)
     weight = MASSES[name] * G
-    assert np.all(np.isfinite(np.asarray(state.q))) and np.all(np.isfinite(np.asarray(qddot)))
+    assert np.all(np.isfinite(np.asarray(state.q))) and np.all(np.isfinite(qddot))
     assert wheel_loads.shape == (WHEELSETS[name], 2)
-    np.testing.assert_allclose(float(jnp.sum(wheel_loads)), weight, rtol=LOAD_TOLERANCE)
+    np.testing.assert_allclose(float(np.sum(wheel_loads)), weight, rtol=LOAD_TOLERANCE)
     np.testing.assert_allclose(wheel_loads[:, 0], wheel_loads[:, 1],  # left = right
                                rtol=LOAD_TOLERANCE)
     np.testing.assert_allclose(wheel_loads, weight / (2 * WHEELSETS[name]),
@@ -245,13 +253,9 @@ def test_static_equilibrium_at_rest(shipped):
         assert state.elements == {}
 
 
-# ---- 0.2 s of each scenario -------------------------------------------------------------
-
-
-@pytest.mark.parametrize("name", sorted(SCENARIOS))
-def test_short_run_of_the_scenario(name):
-    scenario = load_scenario(SCENARIOS[name])
-    result, vehicle, _, _ = run_scenario(scenario, duration=0.2)
+def test_short_run_of_the_scenario(shipped, short_run):
+    name = shipped[0]
+    _, result, vehicle, _, _ = short_run
     assert result.result == diffrax.RESULTS.successful
     assert not bool(result.derailed)
     assert bool(np.all(np.asarray(result.valid)))
