@@ -32,9 +32,9 @@ def integrations_at_level_1():
     Tsit5 run takes 0.48 s at level 1 against 2.6 s at level 0, for 17.5 s to compile
     instead of 13.9 s (IMEX: 0.5 s against 1.3 s, 21.8 s to compile against 14.7 s), so
     it pays only where a module runs for many seconds (tests/vehicles/test_trailer.py:
-    the README's example, 1 s of the paper's curve, 15 s instead of 35 s;
-    tests/vehicles/test_imex_trailer.py's 0.4 s runs, Tsit5 and IMEX, 51-57 s instead of
-    63 s with empty caches)."""
+    the README's example, 1 s of the paper's curve, 15 s instead of 35 s; its 0.4 s
+    runs of IMEX against Tsit5, 51-57 s instead of 63 s with empty caches, measured when
+    they had a module of their own)."""
     level_0_options = jaxrail.compilation.compiler.compiler_options
     compile_function = jaxrail.compilation.cache.compile_function
     integration = [False]
@@ -72,19 +72,19 @@ def integrations_at_level_1():
 _SLOWEST_FIRST = (
     "tests/vehicles/test_flexible_track.py",
     "tests/vehicles/test_irregular_track.py",
-    "tests/vehicles/test_imex_trailer.py",
+    "tests/vehicles/test_trailer.py",
     "tests/montecarlo/test_batch.py",
     "tests/stability/test_curving.py",
     "tests/contact/test_table.py",
     "tests/montecarlo/test_distributed.py",
     "tests/stability/test_linear_stability.py",
     "tests/test_progress.py",
-    "tests/vehicles/test_trailer.py",
     "tests/multibody/test_lean_solve.py",
     "tests/contact/test_search.py",
     "tests/multibody/test_imex.py",
     "tests/geometry/test_geometry.py",
     "tests/vehicles/test_parameters.py",
+    "tests/vehicles/test_imex_trailer.py",
     "tests/montecarlo/test_resume.py",
     "tests/contact/test_irregular_rails.py",
     "tests/vehicles/test_klingel.py",

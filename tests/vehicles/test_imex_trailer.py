@@ -1,4 +1,4 @@
-"""The stiff wheel-rail loads IMEX treats implicitly, and IMEX on the 11-body trailer.
+"""The stiff wheel-rail loads IMEX treats implicitly.
 
 1. ``wheelset_load_jacobian`` (the force laws differentiated in their six scalar
    inputs, chained with the kinematics by hand) equals forward-mode AD of the whole
@@ -6,9 +6,9 @@
    at rest 4 mm off centre).
 2. A load Jacobian kept across steps (``StiffJacobian.turned``) equals the Jacobian
    evaluated at the wheelset turned about its axle.
-3. The trailer on the straight from the paper's 2 mm misalignment: IMEX (steps of
-   about 1 ms, a new Jacobian every 8 accepted steps) against Tsit5 (about 0.35 ms)
-   for 0.4 s, lateral displacements within 0.05 mm and wheel loads within 2 %.
+
+IMEX against Tsit5 on the 11-body trailer is in tests/vehicles/test_trailer.py, where it
+runs on the programs of that module's ``jaxrail simulate`` run.
 """
 
 from pathlib import Path
@@ -23,21 +23,11 @@ from jaxrail.multibody import State
 from jaxrail.multibody import quaternion as qt
 from jaxrail.multibody.forces import body_torque
 from jaxrail.multibody.imex import stiff_jacobian
-from jaxrail.scenarios import load_scenario, parse_scenario
-from jaxrail.simulation import SolverOptions, simulate
+from jaxrail.scenarios import parse_scenario
 from jaxrail.vehicles.initial import initial_state
 from jaxrail.vehicles.loads import (OnlineContact, VehicleLoads, contact_loads,
                                     wheelset_load_jacobian)
 from jaxrail.vehicles.wheel_rail import patch_loads
-
-DURATION = 0.4
-
-
-@pytest.fixture(scope="module")
-def straight():
-    scenario = load_scenario("straight")
-    vehicle, params, track = scenario.build()
-    return scenario, vehicle, params, track
 
 
 def brute_force_jacobian(contact, patches, q_body, qdot_body):
@@ -105,27 +95,3 @@ def test_a_kept_jacobian_turns_with_the_wheelset(wheelset):
         scale = np.max(np.abs(after))
         assert np.max(np.abs(after - before)) > 0.2 * scale  # the turn matters
         np.testing.assert_allclose(kept, after, rtol=0, atol=1e-5 * scale)
-
-
-@pytest.mark.usefixtures("integrations_at_level_1")
-def test_imex_follows_tsit5_on_the_trailer(straight):
-    scenario, vehicle, params, track = straight
-    results = {}
-    for integrator in ("tsit5", "imex"):
-        options = SolverOptions(rtol=scenario.rtol, atol=scenario.atol, n_outputs=401,
-                                integrator=integrator)
-        results[integrator] = simulate(vehicle, params, track, DURATION, scenario.speed,
-                                       scenario.misalignment, options=options)
-    reference, imex = results["tsit5"], results["imex"]
-    assert imex.status == "successful" == reference.status
-    lateral = np.abs(np.asarray(imex.wheelset_lateral) - np.asarray(reference.wheelset_lateral))
-    assert np.max(lateral) < 5e-5
-    loads = [np.nansum(np.asarray(r.wheels.normal_force), axis=-1) for r in (reference, imex)]
-    assert np.max(np.abs(loads[1] - loads[0])) < 0.02 * np.max(loads[0])
-    assert int(imex.accepted_steps) < 0.5 * int(reference.accepted_steps)
-    # the evaluations each run reports (counted: tests/multibody/test_evaluations.py):
-    # a Jacobian every 8 accepted steps, again at each rejected attempt of such a step
-    assert int(imex.rhs_evaluations) == 8 * int(imex.steps)
-    assert (int(imex.accepted_steps) / 8 <= int(imex.jacobian_evaluations)
-            <= int(imex.accepted_steps) / 8 + 1 + int(imex.rejected_steps))
-    assert int(reference.rhs_evaluations) == 6 * int(reference.steps) + 1

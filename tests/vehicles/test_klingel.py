@@ -2,7 +2,7 @@
 jaxrail.simulation) hunts with Klingel's kinematic wavelength 2 pi sqrt(r0 e / tan(gamma)) at low speed.
 
 Run with IMEX. Tsit5 is checked against IMEX on the trailer
-(tests/vehicles/test_imex_trailer.py); here its steps, about 0.3 ms held by the Hertz
+(tests/vehicles/test_trailer.py); here its steps, about 0.3 ms held by the Hertz
 stiffness, would make the 4 s run cost about 80 s of the suite."""
 
 import numpy as np
