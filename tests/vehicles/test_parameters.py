@@ -107,7 +107,9 @@ def test_gauge_and_wheelbase_move_the_rails_the_axles_and_their_seats():
 
 def test_gauge_and_wheelbase_gradients_under_jit_and_vmap():
     """The bogie's accelerations at a displaced state are differentiable in the gauge and
-    the wheelbase (central differences), and vmap over them equals single calls."""
+    the wheelbase (central differences), and vmap over them equals single calls. Two
+    programs: the jitted value and gradient (also the single calls), and one jitted vmap
+    over the central differences' points and the batch."""
     vehicle, params = bogie()
     track = straight_track(30.0)
     names = ("track_gauge", "wheelbase")
@@ -127,15 +129,21 @@ def test_gauge_and_wheelbase_gradients_under_jit_and_vmap():
         return jnp.sum(qddot.reshape(n, 7)[:, :2] ** 2)
 
     x = jnp.array([1.437, 2.5])
-    f, grad = jax.jit(jax.value_and_grad(lateral))(x)
+    value_and_grad = jax.jit(jax.value_and_grad(lateral))
+    f, grad = value_and_grad(x)
     assert np.isfinite(f) and np.all(np.isfinite(grad)) and np.all(grad != 0.0)
-    evaluate = jax.jit(lateral)
-    for i, h in enumerate((1e-6, 1e-6)):
-        step = h * jnp.eye(2)[i]
-        central = (evaluate(x + step) - evaluate(x - step)) / (2.0 * h)
-        assert abs(float(grad[i]) / float(central) - 1.0) < 1e-4, (i, grad[i], central)
+    h = np.array([1e-6, 1e-6])
+    steps = np.diag(h)
     batch = jnp.array([[1.437, 2.5], [1.433, 2.7]])
-    assert np.allclose(jax.vmap(evaluate)(batch), [evaluate(b) for b in batch], rtol=1e-12)
+    # rows: x + h0, x - h0, x + h1, x - h1, then the batch
+    points = jnp.concatenate([jnp.stack([x + steps[0], x - steps[0], x + steps[1],
+                                         x - steps[1]]), batch])
+    evaluated = jax.jit(jax.vmap(lateral))(points)
+    for i in range(2):
+        central = (evaluated[2 * i] - evaluated[2 * i + 1]) / (2.0 * h[i])
+        assert abs(float(grad[i]) / float(central) - 1.0) < 1e-4, (i, grad[i], central)
+    # single calls: the value of the jitted value-and-gradient at each batch row
+    assert np.allclose(evaluated[4:], [value_and_grad(b)[0] for b in batch], rtol=1e-12)
 
 
 def test_wheelset_mass_sets_each_wheelset_and_its_load():
