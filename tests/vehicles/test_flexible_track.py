@@ -46,6 +46,18 @@ def wheelset():
     return vehicle, params, track, state
 
 
+@pytest.fixture(scope="module")
+def rest_outputs(wheelset):
+    """The wheel outputs (patches, penetrations, forces) at the rest state, compiled
+    once for the tests that read the rest penetration."""
+    from jaxrail.simulation.outputs import wheel_outputs
+
+    vehicle, params, track, state = wheelset
+    outputs = jax.jit(lambda p, t, q, qdot, rails: wheel_outputs(
+        vehicle, p, t, q, qdot, rails, OnlineContact()))
+    return outputs(params, track, state.q, state.qdot, state.track)
+
+
 def _wheel_load(params):
     """Half the wheelset's weight [N]: each wheel's static load."""
     return 0.5 * float(jnp.sum(params.system.bodies.mass)) * G
@@ -77,7 +89,7 @@ def _two_mass_eigenvalues(half_mass, k_contact, c_contact, rail_mass, k_support,
     return np.linalg.eigvals(system)
 
 
-def test_vertical_modes_are_those_of_the_two_mass_model(wheelset):
+def test_vertical_modes_are_those_of_the_two_mass_model(wheelset, rest_outputs):
     vehicle, params, track, state = wheelset
     loads = VehicleLoads(vehicle, params, track, OnlineContact())
     packed = _pack(state)
@@ -92,12 +104,8 @@ def test_vertical_modes_are_those_of_the_two_mass_model(wheelset):
 
     # the linearised contact at rest (eq. 17 at zero penetration rate: (1 + c_e)/2 of
     # Hertz, docs/normal-forces.md) from the wheel load and the rest penetration
-    from jaxrail.simulation.outputs import wheel_outputs
-    outputs = jax.jit(lambda a, b, r: wheel_outputs(vehicle, params, track, a, b, r,
-                                                     OnlineContact()))(state.q, state.qdot,
-                                                                       state.track)
-    active = np.asarray(outputs.active)[0, 0]
-    delta = float(np.asarray(outputs.penetration)[0, 0][active][0])
+    active = np.asarray(rest_outputs.active)[0, 0]
+    delta = float(np.asarray(rest_outputs.penetration)[0, 0][active][0])
     assert np.sum(active) == 1
     load = _wheel_load(params)
     law = params.contact.normal_law
@@ -146,7 +154,7 @@ def _drop(vehicle, params, track, state, drop):
 
 
 @pytest.mark.parametrize("flexible", [False, True], ids=["rigid", "flexible"])
-def test_peak_load_of_a_dropped_wheelset(wheelset, flexible):
+def test_peak_load_of_a_dropped_wheelset(wheelset, rest_outputs, flexible):
     """The fall's energy (from the gap above the unloaded rail) goes into the Hertz
     spring, and on the flexible track into the support in series (its damper off and
     its rail mass neglected: the series-spring estimate). The contact's Hertz constant
@@ -162,10 +170,7 @@ def test_peak_load_of_a_dropped_wheelset(wheelset, flexible):
                             damping=(0.0, 0.0))
     load = _wheel_load(params)
     half = load / G
-    from jaxrail.simulation.outputs import wheel_outputs
-    outputs = eqx.filter_jit(wheel_outputs)(vehicle, params, track, state.q, state.qdot,
-                                            state.track, OnlineContact())
-    delta = float(np.nanmax(np.asarray(outputs.penetration)[0, 0]))
+    delta = float(np.nanmax(np.asarray(rest_outputs.penetration)[0, 0]))
     c_e = float(params.contact.normal_law.restitution)
     at_rest = 2.0 * load / ((1.0 + c_e) * delta**1.5)  # eq. 17 at rest: (1 + c_e)/2 of K
     k_support = float(support.stiffness[1])
