@@ -9,9 +9,12 @@ temporary folder:
   NAME first, so later blocks can read it;
 - other blocks (``text``: printed output) are shown only.
 
-The pages keep their runs tiny (a single wheelset for a few hundredths of a second, two
-Monte Carlo samples, two fit iterations, a coarse stability search), so the pages cost
-little beyond compiling; docs/howto/index.md says the same to readers.
+The pages keep their runs tiny (a single wheelset for a few hundredths of a second, four
+Monte Carlo samples of a tenth of a second, two fit iterations, a coarse stability
+search), so the pages cost little beyond compiling; docs/howto/index.md says the same to
+readers. The Monte Carlo page's study has the inputs, samples and duration of
+tests/montecarlo/test_batch.py's: it loads that program from the persistent
+compilation cache when test_batch ran first with the same cache.
 """
 
 import os
