@@ -31,8 +31,8 @@ outside a loop; several times slower for these small programs):
   ``operations_by_kind``: by HLO opcode;
 - ``element_operations``: the work inside those operations, per looped program
   (:func:`jaxrail._hlo_operations.element_counts`: the elements the optimised HLO's
-  instructions write, fused or not, ``arithmetic`` and ``data_movement``, each inner
-  loop's body once), and ``elements_by_kind`` of the right-hand side (the 15 largest).
+  instructions write, fused or not: ``arithmetic``, ``data_movement`` that writes
+  memory and ``remapped_in_fusions``, each inner loop's body once), and ``elements_by_kind`` of the right-hand side (the 15 largest).
 
 With ``--kernels``, per contact model the kernels of the right-hand side's and the IMEX
 step's loops as XLA:CPU runs them (:func:`jaxrail._kernel_profile.kernel_profile`: each

@@ -13,10 +13,12 @@ runs.
 :func:`element_counts` counts the work inside those kernels: the elements each
 instruction of the optimised module writes, fused or not, split into arithmetic
 (everything that computes a new value) and data movement (copies, transposes,
-concatenations, broadcasts, slices, gathers and the like, which only place values).
+concatenations, broadcasts, slices, gathers and the like, which only place values),
+the moves inside a fused kernel that only remap its indices counted apart.
 """
 
 import collections
+import math
 import re
 
 _NO_WORK = frozenset({"parameter", "constant", "get-tuple-element", "tuple", "bitcast",
@@ -53,14 +55,20 @@ def _computations(hlo_text: str) -> dict[str, list[tuple[str, str]]]:
     return computations
 
 
+def _called(computations, opcode, reference) -> set[str]:
+    """Names of the computations that instructions (of ``opcode``, or any) name by
+    ``reference`` (a pattern such as ``calls=%name``)."""
+    return {m.group(1) for instructions in computations.values()
+            for kind, line in instructions if opcode in (None, kind)
+            for m in [reference.search(line)] if m}
+
+
 def operation_counts(compiled) -> dict:
     """``{"operations": n, "by_kind": {opcode: n}}`` of a compiled JAX program
     (``jax.jit(f).lower(...).compile()``), the operations that become thunks (module
     docstring)."""
     computations = _computations(compiled.as_text())
-    fused = {m.group(1) for instructions in computations.values()
-             for opcode, line in instructions if opcode == "fusion"
-             for m in [_FUSED.search(line)] if m}
+    fused = _called(computations, "fusion", _FUSED)
     kinds = collections.Counter(opcode for name, instructions in computations.items()
                                 if name not in fused for opcode, _ in instructions
                                 if opcode not in _NO_WORK)
@@ -70,13 +78,6 @@ def operation_counts(compiled) -> dict:
 def _shapes(text: str) -> list[list[int]]:
     """The dimensions of each array in a result type (one, or a tuple's)."""
     return [[int(d) for d in filter(None, dims.split(","))] for dims in _ARRAY.findall(text)]
-
-
-def _size(dims) -> int:
-    size = 1
-    for d in dims:
-        size *= d
-    return size
 
 
 def element_counts(compiled) -> dict:
@@ -90,11 +91,8 @@ def element_counts(compiled) -> dict:
     The reducers of reductions are part of those, and custom calls (LAPACK) are not
     counted: their work is not in the HLO."""
     computations = _computations(compiled.as_text())
-    reducers = {m.group(1) for instructions in computations.values()
-                for _, line in instructions for m in [_APPLIED.search(line)] if m}
-    fused = {m.group(1) for instructions in computations.values()
-             for opcode, line in instructions if opcode == "fusion"
-             for m in [_FUSED.search(line)] if m}
+    reducers = _called(computations, None, _APPLIED)
+    fused = _called(computations, "fusion", _FUSED)
     dims = {}  # instruction name -> its result's first array's dimensions
     for instructions in computations.values():
         for _, line in instructions:
@@ -116,15 +114,15 @@ def element_counts(compiled) -> dict:
             if opcode in _CONTAINERS:
                 continue
             result = _RESULT.search(line)
-            written = sum(_size(d) for d in _shapes(result.group(1))) if result else 0
+            written = sum(math.prod(d) for d in _shapes(result.group(1))) if result else 0
             operands = _OPERANDS.findall(line.split(opcode + "(", 1)[1])
             if opcode in ("reduce", "reduce-window") and operands:
-                written = max(written, _size(dims.get(operands[0], [])))
+                written = max(written, math.prod(dims.get(operands[0], [])))
             elif opcode == "dot" and operands:
                 contracted = _CONTRACTED.search(line)
                 lhs = dims.get(operands[0], [])
                 axes = [int(a) for a in contracted.group(1).split(",") if a] if contracted else []
-                written *= _size(lhs[a] for a in axes if a < len(lhs))
+                written *= math.prod(lhs[a] for a in axes if a < len(lhs))
             kinds[opcode] += written
             if opcode in DATA_MOVEMENT:
                 if computation in fused and _NAMED.match(line).group(1) not in written_out:
