@@ -24,11 +24,15 @@ arrays, for experiments/paper_curve/figures.py), its results file (``.h5``) and 
 its outer wheel's largest Q and Y/Q and the largest rail deflections.
 Usage: ``python benchmarks/paper_curve.py [--duration 41] [--save DIR]
 [--scenarios paper-curve-simplified paper-curve] [--tracks smooth german-low]
-[--contacts online] [--supports rigid] [--integrators tsit5 imex]``.
+[--contacts online] [--supports rigid] [--integrators tsit5 imex]
+[--formulations joints auto]``; ``--formulations joints auto`` runs each case with the
+vehicle file's joints (eq. 19, the reference) and with the wheelsets carrying their
+axleboxes (no joints), the second compared with the first.
 """
 
 import argparse
 import dataclasses
+import itertools
 import json
 import os
 import pickle
@@ -63,16 +67,22 @@ def main():
     parser.add_argument("--scenarios", nargs="+",
                         default=["paper-curve-simplified", "paper-curve"])
     parser.add_argument("--tracks", nargs="+", default=["smooth", "german-low"],
-                        help="smooth, or an irregularity spectrum (seed 7, 3-150 m)")
+                        help="smooth, an irregularity spectrum (seed 7, 3-150 m), or "
+                        "'scenario': the scenario's own")
     parser.add_argument("--contacts", nargs="+", default=["online"],
                         choices=("online", "table"))
     parser.add_argument("--integrators", nargs="+", default=["tsit5", "imex"],
                         type=_integrator, help="tsit5, imex (a new load Jacobian every 8 "
                         "accepted steps) or imex-jN (every N)")
     parser.add_argument("--supports", nargs="+", default=["rigid"],
-                        choices=("rigid", "flexible"))
+                        choices=("rigid", "flexible", "scenario"))
+    parser.add_argument("--formulations", nargs="+", default=["joints"],
+                        choices=("auto", "joints"), help="auto: the wheelsets carry their "
+                        "axleboxes (no joints); joints: eq. (19) with the axle joints")
+    parser.add_argument("--no-cached-compile", action="store_true",
+                        help="skip the cached-compile child runs")
     parser.add_argument("--progress", action="store_true")
-    parser.add_argument("--cached-child", nargs=5, help=argparse.SUPPRESS)
+    parser.add_argument("--cached-child", nargs=6, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.cached_child:
         print(json.dumps(_compile_only(*args.cached_child, args.duration)))
@@ -86,20 +96,25 @@ def main():
             for contact in args.contacts:
                 first = None
                 for support in args.supports:
-                    for integrator in args.integrators:
-                        scenario = _scenario(name, track, integrator, support)
+                    for integrator, formulation in itertools.product(args.integrators,
+                                                                     args.formulations):
+                        scenario = _scenario(name, track, integrator, support, formulation)
                         result, vehicle, params, _ = run_scenario(
                             scenario, args.duration, args.progress, contact=contact)
                         runs.append(_report(name, scenario, contact, integrator, result,
                                             first))
-                        runs[-1].update(track=track, support=support)
-                        runs[-1]["cached_compile_time_s"] = _cached_compile(
-                            name, track, contact, integrator, support, args.duration)
+                        runs[-1].update(track=track, support=support, formulation=formulation,
+                                        bodies=vehicle.system.n_bodies,
+                                        constraint_rows=vehicle.system.n_constraints)
+                        if not args.no_cached_compile:
+                            runs[-1]["cached_compile_time_s"] = _cached_compile(
+                                name, track, contact, integrator, support, formulation,
+                                args.duration)
                         print(json.dumps(runs[-1]), flush=True)
                         first = result if first is None else first
                         if args.save is not None:
-                            _save(args.save, f"{name}-{track}-{contact}-{support}-{integrator}",
-                                  scenario, result, vehicle, params)
+                            _save(args.save, f"{name}-{track}-{contact}-{support}-{integrator}"
+                                  f"-{formulation}", scenario, result, vehicle, params)
     print(json.dumps({"benchmark": "paper_curve", "runs": runs,
                       "irregular_over_smooth_wall_time": _irregular_over_smooth(runs),
                       "flexible_over_rigid_wall_time": _flexible_over_rigid(runs),
@@ -115,15 +130,20 @@ def _integrator(text):
     raise argparse.ArgumentTypeError(f"{text!r} is not tsit5, imex or imex-jN")
 
 
-def _scenario(name, track, integrator, support="rigid"):
+def _scenario(name, track, integrator, support="rigid", formulation="auto"):
     """The built-in scenario ``name`` with ``integrator`` (tsit5, imex, or imex-jN: a new
     load Jacobian every N accepted steps) on the design track ("smooth") or on a
-    realisation of the spectrum ``track`` (seed 7, 3-150 m), on rigid rails or the
-    flexible track (``support``)."""
+    realisation of the spectrum ``track`` (seed 7, 3-150 m) or the scenario's own
+    ("scenario"), on rigid rails, the flexible track or the scenario's (``support``), with the vehicle's ``formulation`` (auto or joints)."""
     every = {} if not integrator.startswith("imex-j") else {"jacobian_every": int(integrator[6:])}
-    scenario = dataclasses.replace(load_scenario(name), integrator=integrator[:4] if every
-                                   else integrator, **every,
-                                   flexible={} if support == "flexible" else None)
+    scenario = load_scenario(name)
+    flexible = scenario.flexible if support == "scenario" else (
+        {} if support == "flexible" else None)
+    scenario = dataclasses.replace(scenario, integrator=integrator[:4] if every
+                                   else integrator, **every, flexible=flexible,
+                                   formulation=formulation)
+    if track == "scenario":
+        return scenario
     if track == "smooth":
         return dataclasses.replace(scenario, irregularities=None)
     return dataclasses.replace(scenario, irregularities=IrregularitySpec(
@@ -131,8 +151,10 @@ def _scenario(name, track, integrator, support="rigid"):
 
 
 def _irregular_over_smooth(runs):
-    """{scenario/track/contact/integrator: wall time over the smooth run's}."""
-    key = lambda r: (r["scenario"], r["contact"], r["support"], r["integrator"])  # noqa: E731
+    """{scenario/track/contact/support/integrator/formulation: wall time over the smooth
+    run's}."""
+    key = lambda r: (r["scenario"], r["contact"], r["support"], r["integrator"],  # noqa: E731
+                     r["formulation"])
     smooth = {key(r): r["wall_time_s"] for r in runs if r["track"] == "smooth"}
     return {"/".join((r["scenario"], r["track"], *key(r)[1:])): round(
         r["wall_time_s"] / smooth[key(r)], 3)
@@ -140,17 +162,18 @@ def _irregular_over_smooth(runs):
 
 
 def _flexible_over_rigid(runs):
-    """{scenario/track/contact/integrator: a flexible run's wall time over its rigid
-    twin's}."""
-    key = lambda r: (r["scenario"], r["track"], r["contact"], r["integrator"])  # noqa: E731
+    """{scenario/track/contact/integrator/formulation: a flexible run's wall time over its
+    rigid twin's}."""
+    key = lambda r: (r["scenario"], r["track"], r["contact"], r["integrator"],  # noqa: E731
+                     r["formulation"])
     rigid = {key(r): r["wall_time_s"] for r in runs if r["support"] == "rigid"}
     return {"/".join(key(r)): round(r["wall_time_s"] / rigid[key(r)], 3)
             for r in runs if r["support"] == "flexible" and key(r) in rigid}
 
 
-def _compile_only(name, track, contact, integrator, support, duration):
+def _compile_only(name, track, contact, integrator, support, formulation, duration):
     """compile_time_s of a 1 ms run with the options of a ``duration`` run."""
-    scenario = _scenario(name, track, integrator, support)
+    scenario = _scenario(name, track, integrator, support, formulation)
     vehicle, params, track = scenario.build()
     duration = scenario.duration if duration is None else duration
     result = simulate(vehicle, params, track, 1e-3, scenario.speed, scenario.misalignment,
@@ -159,10 +182,10 @@ def _compile_only(name, track, contact, integrator, support, duration):
     return {"compile_time_s": float(result.compile_time_s), "status": result.status}
 
 
-def _cached_compile(name, track, contact, integrator, support, duration):
+def _cached_compile(name, track, contact, integrator, support, formulation, duration):
     """Compile time [s] of the same programs in a new process (the cache filled)."""
     command = [sys.executable, __file__, "--cached-child", name, track, contact, integrator,
-               support]
+               support, formulation]
     if duration is not None:
         command += ["--duration", str(duration)]
     out = subprocess.run(command, stdout=subprocess.PIPE, text=True, check=True)

@@ -8,6 +8,7 @@ from jaxtyping import Array
 
 from . import bodies as bd
 from . import forces as fc
+from .axle_frame import ElementView
 from .equations import constraints
 from .system import System, SystemParams, _element_states
 
@@ -34,8 +35,9 @@ def potential_energy(system: System, params: SystemParams, q, elements=None) -> 
     ``elements``: their internal states, where the system has such elements."""
     r, _ = bd.split_coordinates(q)
     v = -jnp.sum(params.bodies.mass * (r @ params.gravity))
+    seen = ElementView(system.axle_bodies, q).q  # the coordinates the elements see
     for g in system.force_groups:
-        v = v + fc.element_potential(g.kind, g.body_i, g.body_j, params.forces[g.kind], q,
+        v = v + fc.element_potential(g.kind, g.body_i, g.body_j, params.forces[g.kind], seen,
                                      _element_states(system, elements, g.kind))
     return v
 
@@ -43,7 +45,9 @@ def potential_energy(system: System, params: SystemParams, q, elements=None) -> 
 @eqx.filter_jit
 def dissipated_power(system: System, params: SystemParams, q, qdot, elements=None) -> Array:
     """The power [W] the force elements dissipate at this state (>= 0)."""
-    return sum((fc.element_power(g.kind, g.body_i, g.body_j, params.forces[g.kind], q, qdot,
+    view = ElementView(system.axle_bodies, q, qdot)
+    return sum((fc.element_power(g.kind, g.body_i, g.body_j, params.forces[g.kind], view.q,
+                                 view.qdot,
                                  _element_states(system, elements, g.kind))
                 for g in system.force_groups), jnp.zeros((), dtype=jnp.float64))
 

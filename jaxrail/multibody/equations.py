@@ -22,6 +22,7 @@ from . import bodies as bd
 from . import forces as fc
 from . import joints as jt
 from . import quaternion as qt
+from .axle_frame import ElementView
 from .state import State
 from .system import System, SystemParams, _element_states, stateful_groups
 
@@ -66,10 +67,13 @@ def generalized_forces(system: System, params: SystemParams, t, q, qdot,
     states ``{kind: (k, r)}`` (:class:`State`), where the system has such elements.
     """
     g = fc.gravity_forces(params.bodies.mass, params.gravity, system.n_bodies)
+    view = ElementView(system.axle_bodies, q, qdot)
+    on_view = jnp.zeros_like(g) if system.axle_bodies else g  # summed as the elements see
     for grp in system.force_groups:
-        g = g + fc.element_forces(grp.kind, grp.body_i, grp.body_j,
-                                  params.forces[grp.kind], q, qdot,
-                                  _element_states(system, elements, grp.kind))
+        on_view = on_view + fc.element_forces(grp.kind, grp.body_i, grp.body_j,
+                                              params.forces[grp.kind], view.q, view.qdot,
+                                              _element_states(system, elements, grp.kind))
+    g = g + view.pull(on_view) if system.axle_bodies else on_view
     if external is not None:
         forces, torques = external(t, q, qdot)
         n = system.n_bodies
@@ -82,15 +86,17 @@ def generalized_forces(system: System, params: SystemParams, t, q, qdot,
 
 def element_rates(system: System, params: SystemParams, q, qdot, elements) -> dict:
     """``{kind: (k, r)}``: the rates of the force elements' internal states."""
-    return {g.kind: fc.element_loads(g.kind, g.body_i, g.body_j, params.forces[g.kind], q,
-                                     qdot, elements[g.kind])[1]
-            for g in stateful_groups(system)}
+    groups = stateful_groups(system)
+    view = ElementView(system.axle_bodies if groups else (), q, qdot)
+    return {g.kind: fc.element_loads(g.kind, g.body_i, g.body_j, params.forces[g.kind],
+                                     view.q, view.qdot, elements[g.kind])[1]
+            for g in groups}
 
 
 def initial_element_states(system: System, params: SystemParams, q) -> dict:
     """``{kind: (k, r)}``: the force elements' internal states at rest at q (7 n,), each
     element unloaded through them (``forces.ForceKind.initial``)."""
-    q = jnp.asarray(q, dtype=jnp.float64)
+    q = ElementView(system.axle_bodies, jnp.asarray(q, dtype=jnp.float64)).q
     return {g.kind: fc.element_initial_states(g.kind, g.body_i, g.body_j,
                                               params.forces[g.kind], q)
             for g in stateful_groups(system)}

@@ -36,13 +36,16 @@ class System(eqx.Module):
     """Static structure of a multibody system (no array leaves; hashable).
 
     Fields: n_bodies; body_names; joint_groups and force_groups, one `Group` per kind
-    present, in the order of joints.JOINT_KINDS and forces.FORCE_KINDS.
+    present, in the order of joints.JOINT_KINDS and forces.FORCE_KINDS; axle_bodies:
+    the bodies (wheelsets) whose force elements attach to their non-spinning axle
+    frame (:mod:`.axle_frame`), sorted.
     """
 
     n_bodies: int = eqx.field(static=True)
     body_names: tuple[str, ...] = eqx.field(static=True)
     joint_groups: tuple[Group, ...] = eqx.field(static=True)
     force_groups: tuple[Group, ...] = eqx.field(static=True)
+    axle_bodies: tuple[int, ...] = eqx.field(static=True, default=())
 
     @property
     def n_constraints(self) -> int:
@@ -124,7 +127,7 @@ def _groups(elements, kinds, names, what):
 
 
 def build_system(bodies, joints=(), forces=(), gravity=(0.0, 0.0, 0.0),
-                 baumgarte=(10.0, 10.0)) -> tuple[System, SystemParams]:
+                 baumgarte=(10.0, 10.0), axle_bodies=()) -> tuple[System, SystemParams]:
     """(System, SystemParams) from build-time descriptions.
 
     Arguments:
@@ -136,6 +139,9 @@ def build_system(bodies, joints=(), forces=(), gravity=(0.0, 0.0, 0.0),
             MaxwellDamper, AirSpring).
         gravity: (3,) [m/s^2], global; e.g. (0, 0, -9.81) with z up.
         baumgarte: (alpha, beta) [1/s], feedback gains of eq. (19).
+        axle_bodies: bodies (names or indices) that spin about their y axis and whose
+            force elements attach to their non-spinning axle frame instead
+            (:mod:`.axle_frame`): wheelsets that carry their axleboxes.
     """
     require_float64("a multibody system")
     bodies = tuple(bodies)
@@ -150,7 +156,10 @@ def build_system(bodies, joints=(), forces=(), gravity=(0.0, 0.0, 0.0),
         raise ValueError(f"baumgarte gains must be >= 0, got {baumgarte}")
     joint_groups, joint_specs = _groups(tuple(joints), jt.JOINT_KINDS, names, "joint")
     force_groups, force_specs = _groups(tuple(forces), fc.FORCE_KINDS, names, "force")
-    system = System(len(bodies), names, joint_groups, force_groups)
+    axles = tuple(sorted({_body_index(b, names, "axle_bodies") for b in axle_bodies}))
+    if -1 in axles:
+        raise ValueError("axle_bodies: the ground has no axle")
+    system = System(len(bodies), names, joint_groups, force_groups, axles)
     params = SystemParams(
         bodies=bd.BodyParams(float64_array([b.mass for b in bodies]), float64_array(inertia)),
         joints={k: _joint_params(s) for k, s in joint_specs.items()},

@@ -29,7 +29,7 @@ from ..simulation import INTEGRATORS, SolverOptions, run_span, simulate
 from ..track import RAIL_KEYS, STANDARD_GAUGE, Arc, Rails, Straight, Track, Transition
 from ..track.flexible import FlexibleTrack
 from ..vehicles import CONTACT_MODELS, contact_model
-from ..vehicles.from_file import vehicle_from_file, vehicle_names
+from ..vehicles.from_file import FORMULATIONS, vehicle_from_file, vehicle_names
 from ..vehicles.suspended_wheelset import suspended_wheelset_file
 from ..vehicles.trailer import trailer_values
 
@@ -72,6 +72,7 @@ class Scenario:
     irregularities: IrregularitySpec | None = None
     flexible: dict | None = None
     vehicle_file: str | None = None
+    formulation: str = "joints"
 
     def solver_options(self, duration=None, progress=False) -> SolverOptions:
         """SolverOptions with ``output_rate`` samples per second over the duration."""
@@ -156,7 +157,8 @@ class Scenario:
         # every model is a built-in vehicle file; [vehicle] data replaces its named
         # parameters (the suspended wheelset's primary longitudinal stiffness included)
         values = None if self.vehicle_data is None else trailer_values(self.vehicle_data)
-        options = {"wheel": self._profile("wheel", "vehicle"), "parameters": values}
+        options = {"wheel": self._profile("wheel", "vehicle"), "parameters": values,
+                   "formulation": self.formulation}
         if self.model == "suspended-wheelset":
             curved = [k + 1 for k, seg in enumerate(self.segments) if seg["kind"] != "straight"]
             if curved and curve_radius is None:
@@ -170,7 +172,7 @@ class Scenario:
         return vehicle, params, self.track()
 
 
-_TABLES = {"vehicle": {"model", "file", "wheel", "data"},
+_TABLES = {"vehicle": {"model", "file", "wheel", "data", "formulation"},
            "contact": {"friction", "mode"},
            "track": {"segments", "rail", "inclination", "gauge", "flexible"},
            "run": {"speed", "misalignment", "duration"},
@@ -306,6 +308,8 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
         gauge=number(track.get("gauge", STANDARD_GAUGE), "gauge", where, "[track] gauge"),
         vehicle_data=_vehicle_path(vehicle, "data", where),
         vehicle_file=_vehicle_path(vehicle, "file", where),
+        formulation=checks.text(vehicle, "formulation", where, "[vehicle]", "joints",
+                                FORMULATIONS),
         friction=number(contact.get("friction", 0.4), "friction", where, "[contact] friction"),
         segments=_segments(track.get("segments"), where),
         speed=number(run.get("speed"), "speed", where, "[run] speed"),

@@ -20,6 +20,7 @@ from ..multibody import RigidBody, build_system
 from ..multibody import forces as fc
 from ..track import RAIL_KEYS
 from . import element_kinds as ek
+from .axleboxes import carry_axleboxes
 from .load_path import check_supported, static_loads
 from .quantities import check_dimension, file_error, read_number
 from .vehicle import Vehicle, VehicleParams
@@ -28,6 +29,7 @@ from .wheel_rail import ContactParameters
 from .wheels import wheel_profile
 
 VEHICLE_KEYS = ("name", "description", "gravity")
+FORMULATIONS = ("joints", "auto")
 
 
 def vehicle_names() -> list[str]:
@@ -70,7 +72,8 @@ def vehicle_from_file(path_or_name, **options) -> tuple[Vehicle, VehicleParams]:
 
 def vehicle_from_data(data: dict, where: str = "<data>", folder=None, *, wheel=None,
                       config: SearchConfig = SearchConfig(), contact=None,
-                      parameters=None) -> tuple[Vehicle, VehicleParams]:
+                      parameters=None, formulation: str = "joints"
+                      ) -> tuple[Vehicle, VehicleParams]:
     """``(Vehicle, VehicleParams)`` from a vehicle file's content as plain data. The rail
     profile and the gauge are the track's (:class:`jaxrail.track.Rails`, a scenario's
     ``[track]``), not the vehicle's: a file that names them is refused.
@@ -82,11 +85,21 @@ def vehicle_from_data(data: dict, where: str = "<data>", folder=None, *, wheel=N
             contact: :class:`ContactParameters` (default ones).
         parameters: ``{"group.name": value}`` in SI units, replacing the file's named
             parameters (everything that depends on them follows).
+        formulation: ``"auto"``: each wheelset carries its axlebox body where the
+            topology allows it (:func:`~jaxrail.vehicles.axleboxes.carry_axleboxes`:
+            no axle joints), else the file's joints; ``"joints"``: the file's bodies and
+            joints as written (eq. 19), the reference the other is checked against.
     """
+    if formulation not in FORMULATIONS:
+        raise ValueError(f"formulation must be one of {FORMULATIONS}, got {formulation!r}")
     model = read_vehicle_model(data, where, parameters)
     settings = _vehicle_table(model)
     _check_axleboxes(model)
     check_supported(model)
+    axle_bodies = ()
+    if formulation == "auto":
+        folded = carry_axleboxes(model)
+        model, axle_bodies = folded.model, folded.axle_bodies
     wheel_spec = _wheels(model)
     if wheel is None:
         profile, radius, b2b, table = wheel_spec
@@ -100,7 +113,8 @@ def vehicle_from_data(data: dict, where: str = "<data>", folder=None, *, wheel=N
     forces = [_description(model, link, position, loads) for link in model.elements]
     bodies = [RigidBody(b.name, b.mass, b.inertia) for b in model.bodies]
     system, system_params = build_system(bodies, joints, forces,
-                                         gravity=(0.0, 0.0, -settings["gravity"]))
+                                         gravity=(0.0, 0.0, -settings["gravity"]),
+                                         axle_bodies=axle_bodies)
     names = system.body_names
     leading = sorted(model.wheelsets, key=lambda w: -position[w.body][0])
     axleboxes = tuple(names.index(w.axlebox) for w in leading if w.axlebox is not None)

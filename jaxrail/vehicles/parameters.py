@@ -98,18 +98,22 @@ def _wheelbase_get(vehicle, params):
 
 def _wheelbase_set(vehicle, params, value):
     """Each primary bushing's seat on its frame (point_j, frame axes) at +-value/2
-    ahead of the frame's centre, and its axlebox and wheelset there in the layout."""
+    ahead of the frame's centre, and its axlebox and wheelset (or its wheelset that
+    carries its axleboxes) there in the layout."""
     group, rows = _bushing_group(vehicle, "primary")
-    if not vehicle.axleboxes:
-        raise ValueError(f"vehicle {vehicle.name!r} has no axleboxes to move")
     seats = params.system.forces["bushing"].point_j
     ahead = jnp.sign(seats[jnp.asarray(rows), 0]) * 0.5 * jnp.asarray(value, jnp.float64)
     layout = params.layout
     for x, row in zip(ahead, rows):
-        axlebox = group.body_i[row]
-        wheelset = vehicle.wheelsets[vehicle.axleboxes.index(axlebox)]
-        layout = layout.at[jnp.asarray([axlebox, wheelset]), 0].set(
-            layout[group.body_j[row], 0] + x)
+        carried = group.body_i[row]
+        if carried in vehicle.axleboxes:
+            moved = [carried, vehicle.wheelsets[vehicle.axleboxes.index(carried)]]
+        elif carried in vehicle.wheelsets:
+            moved = [carried]
+        else:
+            raise ValueError(f"vehicle {vehicle.name!r}: the primary bushings' body i is "
+                             f"neither an axlebox body nor a wheelset")
+        layout = layout.at[jnp.asarray(moved), 0].set(layout[group.body_j[row], 0] + x)
     return eqx.tree_at(lambda p: (p.system.forces["bushing"].point_j, p.layout), params,
                        (seats.at[jnp.asarray(rows), 0].set(ahead), layout))
 

@@ -546,3 +546,105 @@ def test_toml_syntax_error_names_the_file(tmp_path):
     path.write_text("[vehicle]\nname = \n")
     with pytest.raises(ValueError, match="broken.toml"):
         vehicle_from_file(path)
+
+
+# ---- wheelsets that carry their axleboxes (formulation "auto") -------------------------
+
+
+def test_the_wagon_carries_its_axleboxes():
+    vehicle, params = vehicle_from_data(wagon(), where="wagon.toml", formulation="auto")
+    assert vehicle.system.body_names == ("carbody", "wheelset_1", "wheelset_2")
+    assert vehicle.wheelsets == (1, 2) and vehicle.axleboxes == ()
+    assert vehicle.system.axle_bodies == (1, 2) and vehicle.system.joint_groups == ()
+    assert vehicle.system.n_constraints == 3  # the Euler parameters' normalisation only
+    bodies = params.system.bodies
+    np.testing.assert_array_equal(bodies.mass, [20000.0, 1800.0, 1800.0])
+    np.testing.assert_array_equal(bodies.inertia[1], np.diag([1320.0, 112.0, 1320.0]))
+    (group,) = vehicle.system.force_groups
+    assert group.body_i == (1, 1, 2, 2) and group.body_j == (0, 0, 0, 0)
+    bushing = params.system.forces["bushing"]
+    np.testing.assert_array_equal(bushing.point_i, [[0, 1, 0], [0, -1, 0]] * 2)
+    np.testing.assert_array_equal(bushing.preload[:, 2], -20000.0 * G / 4)
+    # the rotation about the axle held only the axlebox body: gone with it
+    np.testing.assert_array_equal(bushing.stiffness[0], [30e6, 4e6, 1.2e6, 0, 0, 0])
+    np.testing.assert_array_equal(bushing.damping[0], [0, 0, 4e3, 0, 0, 0])
+    with pytest.raises(ValueError, match="formulation must be one of"):
+        vehicle_from_data(wagon(), formulation="twists")
+
+
+def _refolded(change):
+    data = wagon()
+    change(data["template"]["axle"])
+    return data
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda t: t["body"][0].update(inertia=q([200, 4, 150], "kg m^2")), "differs about x"),
+    (lambda t: t["body"][0].update(at=[0, 0, q(0.6, "m")]), "not centred"),
+    (lambda t: t["joint"][0].update(axis=[0, 0, 1]), "does not turn about the axle"),
+    (lambda t: t["element"][0].update(at=[q(0.1, "m"), q(1.0, "m"), "r0"]), "off the axle"),
+])
+def test_folding_is_refused_where_it_would_change_the_model(change, words):
+    from jaxrail.vehicles.axleboxes import carry_axleboxes
+    data = _refolded(change)
+    assert words in carry_axleboxes(read_vehicle_model(data, "wagon.toml")).reason
+    vehicle, _ = vehicle_from_data(data, where="wagon.toml", formulation="auto")
+    assert vehicle.system.n_bodies == 5 and vehicle.system.axle_bodies == ()
+
+
+def _angular_acceleration(q, qddot, body):
+    """omega-dot (3,) [rad/s^2] (global) of ``body``: 2 E(p) pddot (E(pdot) pdot = 0)."""
+    from jaxrail.multibody import quaternion as qt
+    return 2.0 * qt.e_matrix(q[7 * body + 3:7 * body + 7]) @ qddot[7 * body + 3:7 * body + 7]
+
+
+def test_folded_accelerations_are_eq_19s_with_the_axle_joints():
+    """The wagon without its pitch springs, in a displaced, spinning state: the carbody's
+    and the wheelsets' accelerations of the folded wagon are those of eq. (19) with
+    the axlebox bodies on their axle joints (each at its axle frame), under the same
+    loads on the wheelsets. On a rolled axle the two differ by the elements' pitch
+    moment on the axle frame times tan(roll) (jaxrail.multibody.axle_frame), which a
+    free axlebox body's pitch takes instead: here the axles are level."""
+    from jaxrail.multibody import accelerations
+    from jaxrail.multibody import quaternion as qt
+    from jaxrail.multibody.axle_frame import axle_rotation
+    from jaxrail.multibody.loads import FixedLoads
+
+    def no_pitch_spring(t):
+        t["element"][0]["stiffness"] = q([30, 4, 1.2, 0, 0, 0], ["MN/m"] * 3 + ["kN m/rad"] * 3)
+        t["element"][0]["damping"] = [0, 0, q(4, "kN s/m"), 0, 0, 0]
+    data = _refolded(no_pitch_spring)
+    joined, joined_params = vehicle_from_data(data, formulation="joints")
+    folded, folded_params = vehicle_from_data(data, formulation="auto")
+    rng = np.random.default_rng(11)
+    # folded bodies: carbody, wheelset_1, wheelset_2 (joined: + axlebox_1, _2 before them)
+    r = np.asarray(folded_params.layout) + rng.normal(0.0, 2e-3, (3, 3))
+    angles = rng.normal(0.0, 0.01, (3, 3))  # (roll, spin, yaw) of each body
+    angles[1:, 0] = 0.0  # the axles level (see the docstring)
+    angles[1:, 1] += (1.1, 2.6)
+    p = [qt.multiply(qt.multiply(qt.from_axis_angle((0, 0, 1), a[2]),
+                                 qt.from_axis_angle((1, 0, 0), a[0])),
+                     qt.from_axis_angle((0, 1, 0), a[1])) for a in angles]
+    spin = 18.0 / 0.46  # [rad/s] about each axle; no yaw or roll rate
+    v = rng.normal(0.0, 0.02, (3, 3)) + np.array([18.0, 0.0, 0.0])
+    w = [np.zeros(3)] + [spin * np.asarray(qt.rotation_matrix(p[k]))[:, 1] for k in (1, 2)]
+    pdot = [0.5 * qt.e_matrix(p[k]).T @ w[k] for k in range(3)]
+    q_f = jnp.concatenate([jnp.concatenate([jnp.asarray(r[k]), p[k]]) for k in range(3)])
+    v_f = jnp.concatenate([jnp.concatenate([jnp.asarray(v[k]), pdot[k]]) for k in range(3)])
+    boxes = [jnp.concatenate([jnp.asarray(r[k]), axle_rotation(p[k])]) for k in (1, 2)]
+    box_rates = [jnp.concatenate([jnp.asarray(v[k]), jnp.zeros(4)]) for k in (1, 2)]
+    q_j = jnp.concatenate([q_f[:7], *boxes, q_f[7:]])
+    v_j = jnp.concatenate([v_f[:7], *box_rates, v_f[7:]])
+    wheel_forces = rng.normal(0.0, 1e4, (2, 3))
+    wheel_torques = rng.normal(0.0, 1e3, (2, 3))
+    loads = lambda n: FixedLoads(  # noqa: E731
+        jnp.zeros((n, 3)).at[n - 2:].set(wheel_forces),
+        jnp.zeros((n, 3)).at[n - 2:].set(wheel_torques))
+    a_f, _ = accelerations(folded.system, folded_params.system, 0.0, q_f, v_f, loads(3))
+    a_j, _ = accelerations(joined.system, joined_params.system, 0.0, q_j, v_j, loads(5))
+    for body_f, body_j in ((0, 0), (1, 3), (2, 4)):
+        np.testing.assert_allclose(a_f[7 * body_f:7 * body_f + 3],
+                                   a_j[7 * body_j:7 * body_j + 3], rtol=1e-9, atol=1e-8)
+        np.testing.assert_allclose(_angular_acceleration(q_f, a_f, body_f),
+                                   _angular_acceleration(q_j, a_j, body_j), rtol=1e-9,
+                                   atol=1e-8)
