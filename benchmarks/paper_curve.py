@@ -76,7 +76,7 @@ def main():
                         "accepted steps) or imex-jN (every N)")
     parser.add_argument("--supports", nargs="+", default=["rigid"],
                         choices=("rigid", "flexible", "scenario"))
-    parser.add_argument("--formulations", nargs="+", default=["joints"],
+    parser.add_argument("--formulations", nargs="+", default=["auto"],
                         choices=("auto", "joints"), help="auto: the wheelsets carry their "
                         "axleboxes (no joints); joints: eq. (19) with the axle joints")
     parser.add_argument("--no-cached-compile", action="store_true",

@@ -72,7 +72,7 @@ class Scenario:
     irregularities: IrregularitySpec | None = None
     flexible: dict | None = None
     vehicle_file: str | None = None
-    formulation: str = "joints"
+    formulation: str = "auto"
 
     def solver_options(self, duration=None, progress=False) -> SolverOptions:
         """SolverOptions with ``output_rate`` samples per second over the duration."""
@@ -308,7 +308,7 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
         gauge=number(track.get("gauge", STANDARD_GAUGE), "gauge", where, "[track] gauge"),
         vehicle_data=_vehicle_path(vehicle, "data", where),
         vehicle_file=_vehicle_path(vehicle, "file", where),
-        formulation=checks.text(vehicle, "formulation", where, "[vehicle]", "joints",
+        formulation=checks.text(vehicle, "formulation", where, "[vehicle]", "auto",
                                 FORMULATIONS),
         friction=number(contact.get("friction", 0.4), "friction", where, "[contact] friction"),
         segments=_segments(track.get("segments"), where),

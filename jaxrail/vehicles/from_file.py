@@ -29,7 +29,7 @@ from .wheel_rail import ContactParameters
 from .wheels import wheel_profile
 
 VEHICLE_KEYS = ("name", "description", "gravity")
-FORMULATIONS = ("joints", "auto")
+FORMULATIONS = ("auto", "joints")
 
 
 def vehicle_names() -> list[str]:
@@ -72,7 +72,7 @@ def vehicle_from_file(path_or_name, **options) -> tuple[Vehicle, VehicleParams]:
 
 def vehicle_from_data(data: dict, where: str = "<data>", folder=None, *, wheel=None,
                       config: SearchConfig = SearchConfig(), contact=None,
-                      parameters=None, formulation: str = "joints"
+                      parameters=None, formulation: str = "auto"
                       ) -> tuple[Vehicle, VehicleParams]:
     """``(Vehicle, VehicleParams)`` from a vehicle file's content as plain data. The rail
     profile and the gauge are the track's (:class:`jaxrail.track.Rails`, a scenario's

@@ -44,7 +44,7 @@ def _mode(standing, body, motion):
 
 def test_carbody_and_bogie_bounce_match_the_hand_model(standing):
     # carbody z and both bogies' z together: 4 secondary springs and dampers between,
-    # 8 primary ones under the bogies (the axlebox bodies ride on the fixed axles)
+    # 8 primary ones under the bogies (on the fixed axles)
     v = trailer_values()
     k2, c2 = v["secondary.vertical_stiffness"], v["secondary.vertical_damping"]
     k1, c1 = v["primary.vertical_stiffness"], v["primary.vertical_damping"]
@@ -111,9 +111,9 @@ def test_the_carbodys_modes_are_named(standing):
     assert names == {"lower sway", "upper sway", "bounce", "pitch", "yaw", "longitudinal"}
     lower, upper = (_mode(standing, "carbody", f"{x} sway") for x in ("lower", "upper"))
     assert lower.frequency_hz < upper.frequency_hz
-    real = [m for m in standing.modes if m.frequency_hz == 0.0]
-    assert all(m.time_constant_s > 0.0 and m.damping_ratio == 1.0 for m in real)
-    assert all(m.body.startswith("axlebox") and m.motion.startswith("pitch") for m in real)
+    # the overdamped pitch of the axlebox bodies on their soft springs was the joint
+    # form's only real mode: the wheelsets carry their axleboxes here
+    assert [m for m in standing.modes if m.frequency_hz == 0.0] == []
 
 
 def test_an_off_centre_carbody_loads_its_left_wheels_by_its_moment(standing):

@@ -133,7 +133,9 @@ def test_tags_are_honest_where_the_benchmark_gives_no_value():
 
 def test_bodies_masses_and_element_kinds(shipped):
     name, vehicle, params = shipped
-    assert vehicle.n_wheelsets == WHEELSETS[name] == len(vehicle.axleboxes)
+    # each wheelset carries its axleboxes (the files' axle joints folded away)
+    assert vehicle.n_wheelsets == WHEELSETS[name] == len(vehicle.system.axle_bodies)
+    assert vehicle.system.axle_bodies == vehicle.wheelsets and not vehicle.system.joint_groups
     np.testing.assert_allclose(float(jnp.sum(params.system.bodies.mass)), MASSES[name],
                                rtol=1e-12)
     groups = {g.kind: g.names for g in vehicle.system.force_groups}
@@ -150,8 +152,7 @@ def test_bodies_masses_and_element_kinds(shipped):
     else:
         assert set(groups) == {"bushing", "friction_damper"}
         assert len(groups["friction_damper"]) == 12  # vertical, lateral, longitudinal x 4
-        assert vehicle.system.body_names == ("carbody", "axlebox_1", "axlebox_2",
-                                             "wheelset_1", "wheelset_2")
+        assert vehicle.system.body_names == ("carbody", "wheelset_1", "wheelset_2")
 
 
 def test_coach_element_values():

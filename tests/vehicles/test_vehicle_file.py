@@ -43,7 +43,7 @@ def _same_tree(a, b):
 
 @pytest.fixture(scope="module")
 def trailers():
-    return trailer(), vehicle_from_file("trailer")
+    return trailer(), vehicle_from_file("trailer", formulation="joints")
 
 
 def test_trailer_file_builds_the_python_trailer(trailers):
@@ -70,7 +70,7 @@ def test_trailer_file_carries_every_number_source_and_tag():
 def test_parameter_overrides_follow_into_the_preloads():
     values = trailer_values(carbody__mass=30000.0, primary__vertical_stiffness=1.0e6)
     _, p_py = trailer(values=values)
-    _, p_file = vehicle_from_file("trailer", parameters={
+    _, p_file = vehicle_from_file("trailer", formulation="joints", parameters={
         "carbody.mass": 30000.0, "primary.vertical_stiffness": 1.0e6})
     _same_tree(p_file.system, p_py.system)
 
@@ -113,14 +113,14 @@ def _python_builders():
 @pytest.mark.parametrize("name", ["bogie", "single-wheelset", "suspended-wheelset"])
 def test_builtin_file_builds_the_python_vehicle(name):
     assert name in vehicle_names()
-    _bitwise_same(vehicle_from_file(name), _python_builders()[name]())
+    _bitwise_same(vehicle_from_file(name, formulation="joints"), _python_builders()[name]())
 
 
 @pytest.mark.parametrize("direction", ["left", "right"])
 def test_suspended_wheelset_file_with_a_curve_radius(direction):
     from jaxrail.vehicles.suspended_wheelset import suspended_wheelset, suspended_wheelset_file
 
-    built = suspended_wheelset_file(650.0, direction)
+    built = suspended_wheelset_file(650.0, direction, formulation="joints")
     _bitwise_same(built, suspended_wheelset(curve_radius=650.0, direction=direction))
     kinds = {n: g.kind for g in built[0].system.joint_groups for n in g.names}
     assert kinds == {"axle_1": "revolute", "guide": "revolute"}
@@ -146,7 +146,8 @@ def test_builtin_file_carries_the_trailers_numbers(name):
 def test_builtin_file_takes_trailer_values_as_the_python_builder_does(name):
     values = trailer_values(carbody__mass=30000.0, primary__vertical_damping=5000.0)
     builder = _python_builders()[name]
-    _bitwise_same(vehicle_from_file(name, parameters=values), builder(values=values))
+    _bitwise_same(vehicle_from_file(name, parameters=values, formulation="joints"),
+                  builder(values=values))
 
 
 # ---- units --------------------------------------------------------------------------------
@@ -270,7 +271,7 @@ def _check_sprung_equilibrium(vehicle, params, sprung):
 
 
 def test_two_axle_wagon():
-    vehicle, params = vehicle_from_data(wagon(), where="wagon.toml")
+    vehicle, params = vehicle_from_data(wagon(), where="wagon.toml", formulation="joints")
     assert vehicle.system.body_names == ("carbody", "axlebox_1", "axlebox_2", "wheelset_1",
                                          "wheelset_2")
     assert vehicle.wheelsets == (3, 4) and vehicle.axleboxes == (1, 2)
@@ -302,7 +303,8 @@ def test_off_centre_carbody_gets_balanced_shares():
 
 @pytest.mark.parametrize("axles_x", [("b", "-b"), ("b", 0, "-b")], ids=["2-axle", "3-axle"])
 def test_bogie_coach(axles_x):
-    vehicle, params = vehicle_from_data(coach(axles_x), where="coach.toml")
+    vehicle, params = vehicle_from_data(coach(axles_x), where="coach.toml",
+                                        formulation="joints")
     n = len(axles_x)
     names = vehicle.system.body_names
     assert names == (("carbody", "bogie_1", "bogie_2")
@@ -367,8 +369,9 @@ def test_docs_example_builds():
     text = DOCS.read_text()
     example = re.search(r"## A complete example.*?```toml\n(.*?)```", text, re.S).group(1)
     vehicle, params = vehicle_from_data(tomllib.loads(example), where="docs example")
-    assert vehicle.system.body_names == ("carbody", "axlebox_1", "axlebox_2", "wheelset_1",
-                                         "wheelset_2")
+    # its wheelsets carry their axleboxes (formulation "auto")
+    assert vehicle.system.body_names == ("carbody", "wheelset_1", "wheelset_2")
+    assert vehicle.system.axle_bodies == vehicle.wheelsets == (1, 2)
     np.testing.assert_array_equal(params.system.forces["bushing"].preload[:, 2], -49050.0)
 
 
