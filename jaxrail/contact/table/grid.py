@@ -71,15 +71,18 @@ class ContactTable(eqx.Module):
     float64, sides (left, right): quadratic B-spline coefficients along lateral, yaw
     and roll (two more than the nodes along every axis of two or more nodes) of the
     fields of :data:`FIELDS` per patch slot at each approach level, and in the last slot
-    the wheel's vertical position at that level (first field). Kept as ``heights``, one
-    row of levels per (side, lateral, yaw, roll) node, and ``rows``, one row of slots
-    per node and level, so that a lookup gathers whole rows from the arrays as they are
+    the wheel's vertical position at that level (first field). Kept as ``heights``, the
+    levels of each (side, lateral, yaw, roll) node, and ``rows``, the slots of each
+    node per side and level, the level ahead of the pose axes: a lookup takes the
+    block of nodes around a pose at two levels as one window of each array as it is
     (reshaping a traced table inside the integrator's loop makes XLA:CPU's loop emitters
-    slow), and only the levels it needs; ``values`` gives them back in their shape.
+    slow), and the window comes out as (level, node, slot field), the order in which
+    the lookup's weighted sum over the nodes reads it; ``values`` gives them back in
+    their shape.
 
     Fields:
-        rows: (2 lateral yaw roll approach, slots len(FIELDS)) float64.
-        heights: (2 lateral yaw roll, approach) float64 [m].
+        rows: (2, approach, lateral, yaw, roll, slots len(FIELDS)) float64.
+        heights: (2, lateral, yaw, roll, approach) float64 [m].
         shape: the shape of ``values`` (static).
         grid: the :class:`TableGrid`.
         surfaces: wheel surface index of each slot (static).
@@ -96,15 +99,17 @@ class ContactTable(eqx.Module):
     def __init__(self, values, grid: TableGrid, surfaces, radius):
         self.shape = tuple(int(n) for n in values.shape)
         values = jnp.asarray(values)
-        nodes, slots = math.prod(self.shape[:4]), self.shape[5] - 1
-        self.rows = values[..., :slots, :].reshape(nodes * self.shape[4], -1)
-        self.heights = values[..., slots, 0].reshape(nodes, self.shape[4])
+        slots = self.shape[5] - 1
+        self.rows = jnp.moveaxis(values[..., :slots, :], 4, 1).reshape(
+            self.shape[:1] + self.shape[4:5] + self.shape[1:4] + (-1,))
+        self.heights = values[..., slots, 0]
         self.grid, self.surfaces, self.radius = grid, tuple(surfaces), float(radius)
 
     @property
     def values(self) -> jax.Array:
         """The coefficients in their shape (see the class docstring)."""
-        slots = self.rows.reshape(self.shape[:5] + (self.shape[5] - 1, self.shape[6]))
+        slots = jnp.moveaxis(self.rows, 1, 4).reshape(self.shape[:5] + (self.shape[5] - 1,
+                                                                       self.shape[6]))
         last = jnp.zeros(self.shape[:5] + (1, self.shape[6])).at[..., 0, 0].set(
             self.heights.reshape(self.shape[:5]))
         return jnp.concatenate([slots, last], axis=-2)

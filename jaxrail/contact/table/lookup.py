@@ -40,8 +40,8 @@ def _two_levels(heights, vertical):
     """The levels ``i, i + 1`` around the wheel's ``vertical`` position [m] (``heights``
     (A,) decreasing: the wheel lower at deeper levels; the first or last pair beyond
     them)."""
-    i = jnp.clip(jnp.sum(heights > vertical) - 1, 0, heights.shape[0] - 2)
-    return i + jnp.arange(2)
+    i = jnp.clip(jnp.sum(heights > vertical, dtype=jnp.int32) - 1, 0, heights.shape[0] - 2)
+    return i + jnp.arange(2, dtype=jnp.int32)
 
 
 def _along_levels(heights, fields, vertical, levels):
@@ -85,14 +85,18 @@ def table_patches(table: ContactTable, wheel, track, wheelset_position, wheelset
                             deflection)
     side_index = jnp.where(side > 0.0, 0, 1).astype(jnp.int32)
     slots, count = len(table.surfaces), table.shape[4]
-    nodes, weight = _pose_weights(table, side_index, lateral, yaw, roll)
-    heights = weight @ table.heights[nodes]
+    starts, size, weight = _pose_weights(table, lateral, yaw, roll)
+    zero = jnp.zeros((), jnp.int32)
+    heights = weight @ jax.lax.dynamic_slice(
+        table.heights, (side_index, *starts, zero), (1, *size, count)).reshape(-1, count)
     two = _two_levels(heights, vertical)
-    block = table.rows[(nodes[:, None] * count + two).reshape(-1)].reshape(len(nodes), 2, -1)
-    # (as an einsum over (node, level) with the weights broadcast: XLA:CPU runs the same
-    # sum as a matrix product with the levels folded into the columns 2.4 times slower)
-    weights = jnp.broadcast_to(weight[:, None], (len(nodes), 2))
-    fields = jnp.einsum("nl,nlf->lf", weights, block).reshape(2, slots, len(FIELDS))
+    # the block at the two levels as one window, (level, node, slot field) as stored,
+    # so that the weighted sum over the nodes is a matrix-vector product per level
+    # that reads the window as it is (no transpose of the window)
+    block = jax.lax.dynamic_slice(table.rows, (side_index, two[0], *starts, zero),
+                                  (1, 2, *size, table.rows.shape[-1])).reshape(2, len(weight), -1)
+    weights = jnp.broadcast_to(weight, (2, len(weight)))
+    fields = jnp.einsum("ln,lnf->lf", weights, block).reshape(2, slots, len(FIELDS))
     depth, interpolated = _along_levels(heights[two], fields, vertical,
                                         jnp.asarray(table.grid.levels)[two])
     y_deepest, centre, breadth, rail_from_wheel, curvature = (

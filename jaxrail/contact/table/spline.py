@@ -56,15 +56,15 @@ def _spline_weights(axis: Axis, x):
     return i.astype(jnp.int32), w
 
 
-def _pose_weights(table: ContactTable, side_index, lateral, yaw, roll):
-    """Nodes (27,) of the 3 x 3 x 3 block of B-spline coefficients around a pose (row
-    indices of ``table.heights``) and their weights (27,): the product of the quadratic
-    B-spline weights along lateral, yaw and roll (C1)."""
-    index = jnp.asarray(side_index, dtype=jnp.int32)
-    weight = jnp.ones(())
-    for axis, x, count in zip(_pose_axes(table.grid), (lateral, yaw, roll), table.shape[1:4]):
+def _pose_weights(table: ContactTable, lateral, yaw, roll):
+    """The 3 x 3 x 3 block of B-spline coefficients around a pose: its first
+    (lateral, yaw, roll) coefficient indices (int32 scalars), its size along each axis
+    (3, or 1 on a one-node axis) and the weights (27,) of its coefficients in their
+    order in the table: the product of the quadratic B-spline weights along lateral,
+    yaw and roll (C1)."""
+    starts, weight = [], jnp.ones(())
+    for axis, x in zip(_pose_axes(table.grid), (lateral, yaw, roll)):
         start, w = _spline_weights(axis, x)
-        offsets = jnp.arange(len(w), dtype=jnp.int32)
-        index = (index * count)[..., None] + start + offsets
+        starts.append(start)
         weight = weight[..., None] * w
-    return index.reshape(-1), weight.reshape(-1)
+    return tuple(starts), weight.shape, weight.reshape(-1)
