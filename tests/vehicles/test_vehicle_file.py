@@ -10,6 +10,7 @@ import tomllib
 from pathlib import Path
 from typing import ClassVar
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -651,3 +652,42 @@ def test_folded_accelerations_are_eq_19s_with_the_axle_joints():
         np.testing.assert_allclose(_angular_acceleration(q_f, a_f, body_f),
                                    _angular_acceleration(q_j, a_j, body_j), rtol=1e-9,
                                    atol=1e-8)
+
+
+def test_folded_accelerations_differentiate_as_central_differences():
+    """The folded wagon's accelerations at a displaced, spinning, rolled state, in the
+    primary longitudinal stiffness and the first wheelset's lateral position and yaw
+    rate: forward and reverse mode against central differences (1e-5)."""
+    from jaxrail.multibody import accelerations
+    from jaxrail.multibody import quaternion as qt
+
+    vehicle, params = vehicle_from_data(wagon(), formulation="auto")
+    system = vehicle.system
+    rng = np.random.default_rng(4)
+    r = np.asarray(params.layout) + rng.normal(0.0, 1e-3, (3, 3))
+    p = [qt.multiply(qt.from_axis_angle((1, 0, 0), 0.02 * k),
+                     qt.from_axis_angle((0, 1, 0), 1.3 * k)) for k in range(3)]
+    q0 = jnp.concatenate([jnp.concatenate([jnp.asarray(r[k]), p[k]]) for k in range(3)])
+    spin = [np.zeros(3)] + [18.0 / 0.46 * np.asarray(qt.rotation_matrix(p[k]))[:, 1]
+                            for k in (1, 2)]
+    v0 = jnp.concatenate([jnp.concatenate([jnp.array([18.0, 0.0, 0.0]),
+                                           0.5 * qt.e_matrix(p[k]).T @ spin[k]])
+                          for k in range(3)])
+
+    def accelerations_of(x):  # x: (k_x scale, lateral [m], yaw rate [rad/s])
+        bushing = params.system.forces["bushing"]
+        stiffness = bushing.stiffness.at[:, 0].multiply(x[0])
+        sp = eqx.tree_at(lambda s: s.forces["bushing"].stiffness, params.system, stiffness)
+        q = q0.at[8].add(x[1])
+        turn = 0.5 * qt.e_matrix(q0[10:14]).T @ jnp.array([0.0, 0.0, x[2]])
+        return accelerations(system, sp, 0.0, q, v0.at[10:14].add(turn))[0]
+
+    x0 = jnp.array([1.0, 2e-3, 0.05])
+    forward = jax.jit(jax.jacfwd(accelerations_of))(x0)
+    reverse = jax.jit(jax.jacrev(accelerations_of))(x0)
+    steps = (1e-6, 1e-7, 1e-5)
+    central = np.stack([(accelerations_of(x0.at[i].add(h)) - accelerations_of(x0.at[i].add(-h)))
+                        / (2 * h) for i, h in enumerate(steps)], axis=1)
+    scale = np.max(np.abs(central), axis=0)
+    np.testing.assert_allclose(forward / scale, central / scale, atol=1e-5)
+    np.testing.assert_allclose(reverse / scale, central / scale, atol=1e-5)
