@@ -36,9 +36,7 @@ from . import quaternion as qt
 def axle_direction(p):
     """The unit axle direction (3,) (the body's y axis, global) of Euler parameters p
     (4,), of any norm."""
-    e0, e1, e2, e3 = p / jnp.sqrt(qt.dot(p, p))
-    return jnp.stack([2.0 * (e1 * e2 - e0 * e3), 2.0 * (e0 * e0 + e2 * e2) - 1.0,
-                      2.0 * (e2 * e3 + e0 * e1)])
+    return qt.rotation_matrix(qt.normalize(p))[:, 1]
 
 
 def axle_rotation(p):
