@@ -17,7 +17,8 @@ What folding keeps and drops:
 - every element keeps its points (vehicle frame), now on the axle frame.
 
 Folding is refused (the file keeps its joints, ``reason`` says why) where it would
-change the model beyond that: an axlebox centre off its wheelset's, a joint that is
+change the model beyond that: an axlebox centre off its wheelset's, an inertia
+with products of inertia (the axlebox's or the wheelset's), a joint that is
 not one revolute joint about the axle through the centres, an element point off the
 axle line (a moment about it), an element kind that applies moments other than a
 bushing's, a bushing whose frame does not have the axle as its y axis, or an element
@@ -73,15 +74,13 @@ def _check_joint(joints, wheelset, box, centre):
     return ""
 
 
-def _axle_inertia(body):
-    """(roll, yaw) [kg m^2] of an axlebox body, or None if not the same about x and z
-    (or not principal)."""
+def _principal(body):
+    """The principal moments (3,) [kg m^2] of a body's inertia, or None if it is a
+    tensor with products of inertia."""
     inertia = np.asarray(body.inertia, dtype=float)
     if inertia.shape == (3, 3):
-        if not _close(inertia, np.diag(np.diag(inertia))):
-            return None
-        inertia = np.diag(inertia)
-    return (inertia[0], inertia[2]) if np.isclose(inertia[0], inertia[2], rtol=1e-12) else None
+        return np.diag(inertia) if _close(inertia, np.diag(np.diag(inertia))) else None
+    return inertia
 
 
 def _moved_element(link, box, wheelset, centre):
@@ -124,8 +123,12 @@ def carry_axleboxes(model: VehicleModel) -> Folded:
         reason = _check_joint(model.joints, wheelset, box, centre)
         if reason:
             return Folded(model, (), reason)
-        inertia = _axle_inertia(box)
-        if inertia is None:
+        inertia, own = _principal(box), bodies[wheelset.body]
+        spin = _principal(own)
+        if inertia is None or spin is None:
+            return Folded(model, (), f"{box.name!r} or {own.name!r} has products of "
+                                     f"inertia (not principal about the axle)")
+        if not np.isclose(inertia[0], inertia[2], rtol=1e-12):
             return Folded(model, (), f"axlebox {box.name!r}: its inertia differs about x "
                                      f"and z (the wheelset spins under it)")
         if any(wheelset.body in (e.body_i, e.body_j) for e in model.elements):
@@ -136,12 +139,9 @@ def carry_axleboxes(model: VehicleModel) -> Folded:
                 if isinstance(moved, str):
                     return Folded(model, (), moved)
                 elements[k] = moved
-        own = bodies[wheelset.body]
-        spin = np.asarray(own.inertia, dtype=float)
-        spin = np.diag(spin) if spin.shape == (3, 3) else spin
         merged[own.name] = dataclasses.replace(
             own, mass=own.mass + box.mass,
-            inertia=[spin[0] + inertia[0], spin[1], spin[2] + inertia[1]])
+            inertia=[spin[0] + inertia[0], spin[1], spin[2] + inertia[2]])
         del merged[box.name]
     joints = tuple(j for j in model.joints
                    if not any(name in boxes.values() for name in (j.body_i, j.body_j)))

@@ -584,6 +584,8 @@ def _refolded(change):
 
 @pytest.mark.parametrize("change, words", [
     (lambda t: t["body"][0].update(inertia=q([200, 4, 150], "kg m^2")), "differs about x"),
+    (lambda t: t["wheelset"][0].update(inertia=q([[1120, 0, 5], [0, 112, 0], [5, 0, 1120]],
+                                                 "kg m^2")), "products of inertia"),
     (lambda t: t["body"][0].update(at=[0, 0, q(0.6, "m")]), "not centred"),
     (lambda t: t["joint"][0].update(axis=[0, 0, 1]), "does not turn about the axle"),
     (lambda t: t["element"][0].update(at=[q(0.1, "m"), q(1.0, "m"), "r0"]), "off the axle"),
