@@ -50,6 +50,9 @@ CONTACT_FIELDS = {
     "creepage_x": ("1", "longitudinal creepage"),
     "creepage_y": ("1", "lateral creepage"),
     "spin": ("1/m", "spin creepage"),
+    "semi_axis_a": ("m", "Hertz ellipse semi-axis along the rolling direction"),
+    "semi_axis_b": ("m", "Hertz ellipse semi-axis across the rolling direction, in the "
+                         "contact plane"),
     "lateral_force": ("N", ("total lateral force on the wheel from the rail, track frame, "
                             "positive towards the wheel's field side (a flanging wheel has "
                             "lateral_force < 0; the Nadal Y on the rail is -lateral_force)")),

@@ -88,6 +88,7 @@ def synthetic_result():
         normal_force=floats(normal), creep_force_x=floats(0.1 * normal),
         creep_force_y=floats(-0.05 * normal), creepage_x=floats(np.full(shape, 1e-3)),
         creepage_y=floats(np.full(shape, -2e-3)), spin=floats(np.full(shape, 0.01)),
+        semi_axis_a=floats(np.full(shape, 6e-3)), semi_axis_b=floats(np.full(shape, 5e-3)),
         lateral_force=floats(lateral_force), vertical_force=floats(vertical_force))
     # the rails under wheelset 1 on a flexible track: the right one pressed down most at
     # t7, after the run stopped (not counted), and at t6 before it

@@ -58,7 +58,8 @@ def state_outputs(vehicle, params, track, q, qdot, rails, model, t=0.0, drive=No
     wheels = WheelOutputs(patches.active, patches.surface, patches.y_wheel, patches.y_rail,
                           patches.penetration, patches.contact_angle, forces.normal_force,
                           forces.creep_force_x, forces.creep_force_y, forces.creepage_x,
-                          forces.creepage_y, forces.spin, lateral, vertical)
+                          forces.creepage_y, forces.spin, forces.semi_axis_a,
+                          forces.semi_axis_b, lateral, vertical)
     return wheels, qddot
 
 

@@ -15,7 +15,9 @@ class WheelOutputs(eqx.Module):
     Fields: active; surface (index into the wheel's surfaces); y_wheel, y_rail [m]
     lateral position of the contact point on the wheel and rail profiles; penetration
     [m]; contact_angle [rad]; normal_force [N]; creep_force_x, creep_force_y [N]
-    (contact frame, on the wheel); creepage_x, creepage_y [-], spin [1/m].
+    (contact frame, on the wheel); creepage_x, creepage_y [-], spin [1/m];
+    semi_axis_a, semi_axis_b [m]: the Hertz ellipse's semi-axes along the rolling
+    direction and across it (zero where the slot is empty).
     Per wheel (T, W, 2): lateral_force and vertical_force Q [N], track frame, on the
     wheel from the rail (lateral positive towards the wheel's own field side, so a
     flanging wheel has a negative value; Nadal's Y, the wheel's force on the rail, is
@@ -34,6 +36,8 @@ class WheelOutputs(eqx.Module):
     creepage_x: jax.Array
     creepage_y: jax.Array
     spin: jax.Array
+    semi_axis_a: jax.Array
+    semi_axis_b: jax.Array
     lateral_force: jax.Array
     vertical_force: jax.Array
 

@@ -59,6 +59,7 @@ def fake_result(duration=3.0, speed=20.0, rate=50.0, bodies=BODIES, stop=None,
         contact_angle=floats(patch + 0.02), normal_force=floats(patch + Q0),
         creep_force_x=floats(patch), creep_force_y=floats(patch),
         creepage_x=floats(patch), creepage_y=floats(patch), spin=floats(patch),
+        semi_axis_a=floats(patch + 6e-3), semi_axis_b=floats(patch + 5e-3),
         lateral_force=floats(-y), vertical_force=floats(vertical))  # on the wheel: -Y
     states = [x.reshape(n, -1) for x in (q, qdot, qddot)]
     for x in states:
