@@ -36,7 +36,7 @@ LAYERS = (
     ("geometry", "vehicles"),  # wheel-rail geometry; vehicles on their track
     ("simulation", "results"),  # a run; what a run writes and summarises
     ("scenarios", "stability", "standards"),  # runs set up; stability; assessments
-    ("identification", "montecarlo"),  # studies over many runs of a scenario
+    ("identification", "montecarlo", "wear"),  # studies over many runs of a scenario
     ("plots",),  # figures of all the above
     ("cli",),
 )

@@ -9,6 +9,7 @@ from jaxrail.cli import main
 
 DATA = Path(__file__).parent / "data"
 SCENARIO = str(DATA / "wheelset-straight.toml")
+ROUTES = DATA / "routes"
 RESULTS_FILE = "expected an HDF5 results file written by `jaxrail simulate --out`"
 BAD_INPUTS = [
     (["assess", SCENARIO], f"{SCENARIO}: not an HDF5 file; {RESULTS_FILE}"),
@@ -68,12 +69,28 @@ BAD_INPUTS = [
      "--curve '-300': give RADIUS[:CANT] in m with RADIUS > 0"),
     (["stability", "suspended-wheelset", "--curve", "3000:0.1", "--nonlinear", "65:95"],
      "--nonlinear runs on straight track only: leave out --curve"),
+    (["wear", str(ROUTES / "no-sections.toml")],
+     "no-sections.toml: the route has no sections (give [[sections]] tables)"),
+    (["wear", str(ROUTES / "negative-weight.toml")],
+     "sections[0]: weight must be >= 0, got -1.0"),
+    (["wear", str(ROUTES / "zero-weights.toml")],
+     "the sections' weights sum to 0; they must sum to a positive number"),
+    (["wear", str(ROUTES / "unknown-model.toml")],
+     "unknown wear model 'archard': use one of archard-kth, usfd"),
+    (["wear", str(ROUTES / "map-out-of-range.toml")],
+     "[wear]: wear model archard-kth: k4 = 0.05 lies outside the KTH map's published "
+     "range [0.03, 0.04]"),
+    (["wear", "curved-route", "--distance", "1000", "--step", "2000"],
+     "--step 2000 km is larger than --distance 1000 km"),
+    (["wear", "nofile.toml"], "unknown route 'nofile.toml': use one of straight-route, "
+                              "curved-route or a .toml file"),
 ]
 
 
 @pytest.mark.parametrize("argv, message", BAD_INPUTS)
 def test_bad_command_lines_are_named(argv, message, capsys):
-    quiet = ["--quiet"] if argv[0] in ("simulate", "montecarlo", "tables", "stability") else []
+    quiet = ["--quiet"] if argv[0] in ("simulate", "montecarlo", "tables", "stability",
+                                       "wear") else []
     assert main(argv + quiet) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err

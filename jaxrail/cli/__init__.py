@@ -5,7 +5,8 @@ import os
 import sys
 from pathlib import Path
 
-from . import assess, identify, montecarlo, profiles, simulate, stability, track, vehicle
+from . import (assess, identify, montecarlo, profiles, simulate, stability, track, vehicle,
+               wear)
 
 
 def build_parser():
@@ -22,6 +23,7 @@ def build_parser():
     stability.add_parser(commands)
     assess.add_parser(commands)
     vehicle.add_parser(commands)
+    wear.add_parser(commands)
     return parser
 
 

@@ -18,22 +18,25 @@ Enblom and Berg 2005, Wear 258, 1055-1063):
 - the flexibility ``L = (L1 |xi| + L2 |eta| + L3 c |phi|) / sqrt(xi^2 + eta^2 + c^2
   phi^2)``, ``L1 = 8a/(3 G c11)``, ``L2 = 8a/(3 G c22)``, ``L3 = pi a^2/(4 G c c23)``,
   ``c = sqrt(a b)``: pure creepage of one kind reproduces Kalker's linear theory;
-- the traction, marched from the leading edge: ``p(x - dx) = p(x) - w dx / L`` while it
-  sticks, cut back to ``mu p_F`` along its own direction where it would exceed it
-  (slip);
-- the local slip ``s = w - L (p(x) - p(x - dx)) / dx`` [-]: zero in the stick area,
-  ``V |s|`` the sliding velocity [m/s] in the slip area;
+- the traction, marched from the leading edge in half elements (to each element's
+  centre, where it is reported, and on to its trailing edge): ``p(x - h) = p(x) - w h /
+  L`` while it sticks, cut back to the bound there along its own direction where it
+  would exceed it (slip);
+- the local slip at the centre ``s = w - L (p(x_lead) - p(x_c)) / h``, ``h = dx/2``
+  [-]: zero in the stick area, antiparallel to the traction in the slip area, ``V |s|``
+  the sliding velocity [m/s] there;
 - the Hertz pressure ``p_H = 3N/(2 pi a b) sqrt(1 - x^2/a^2 - y^2/b^2)`` [Pa] that the
   wear laws use (the KTH map is drawn against it).
 
-Both pressures are taken at the element centres and scaled so that they sum to ``N``
+Both pressures are scaled so that their values at the element centres sum to ``N``
 over the elements exactly: the discretisation then conserves the normal force, which the
 wear volumes inherit. Traction on the wheel, opposing its slip (Kalker's convention, as
 :func:`jaxrail.contact.polach.polach`).
 
 Differentiable: the norms and the flexibility's direction weights are guarded (double
 ``where``) at zero creepage and zero traction; an empty patch (``N <= 0`` or a zero
-semi-axis) gives zeros.
+semi-axis) gives zeros. At exactly zero creepage ``L`` has no direction to weigh and is
+``L1``: the derivative there is taken along xi's flexibility in every direction.
 """
 
 import equinox as eqx
@@ -53,8 +56,7 @@ class PatchGrid(eqx.Module):
     """One patch in elements; arrays (..., strips, elements) unless stated.
 
     Fields: x, y [m] element centres (contact frame); area [m^2]; pressure [Pa] (Hertz,
-    scaled to sum to N); traction_x, traction_y [Pa] on the wheel (the mean over the
-    element); slip_x, slip_y [-] (times V: the sliding velocity); sliding [-] =
+    scaled to sum to N); traction_x, traction_y [Pa] on the wheel (at the centre); slip_x, slip_y [-] (times V: the sliding velocity); sliding [-] =
     |slip|; stick (bool): the element sticks; strip_y (..., strips) [m] the strip
     centres.
     """
@@ -137,9 +139,15 @@ def fastsim_patch(
     dx = 2.0 * half / elements
     x = half[:, None] - (jnp.arange(elements)[None, :] + 0.5) * dx[:, None]  # (S, E)
     y = jnp.broadcast_to(strip_y[:, None], x.shape)
-    area = dx[:, None] * dy
-    inside = jnp.maximum(1.0 - (x / a_s) ** 2 - (y / b_s) ** 2, 0.0)
-    bound = mu * _scaled(inside, area, n_s)
+    area = jnp.broadcast_to(dx[:, None] * dy, x.shape)
+    parabola = lambda x: jnp.maximum(1.0 - (x / a_s) ** 2 - (y / b_s) ** 2, 0.0)  # noqa: E731
+    inside = parabola(x)
+    # One factor scales the parabolic pressure at the centres and at the trailing edges.
+    integral = jnp.sum(inside * area)
+    loaded = integral > 0.0
+    scale = jnp.where(loaded, n_s / jnp.where(loaded, integral, 1.0), 0.0)
+    bound_centre = mu * scale * inside
+    bound_edge = mu * scale * parabola(x - 0.5 * dx[:, None])
     # sqrt's slope is infinite at 0: element centres never reach the rim, the guard
     # only keeps an empty patch finite.
     hertz = _scaled(jnp.sqrt(jnp.where(inside > 0.0, inside, 1.0)) * (inside > 0.0),
@@ -149,23 +157,28 @@ def fastsim_patch(
     wx = xi - phi * y  # (S, E) rigid slip at the element centres
     wy = eta + phi * x
 
-    def step(previous, column):
-        px0, py0 = previous
-        wx_i, wy_i, g_i, dx_i = column
-        tx = px0 - wx_i * dx_i / flexibility
-        ty = py0 - wy_i * dx_i / flexibility
+    def saturate(tx, ty, bound):
         size = _safe_norm(tx, ty)
-        slips = size > g_i
-        scale = jnp.where(slips, g_i / jnp.where(slips, size, 1.0), 1.0)
-        px, py = tx * scale, ty * scale
-        sx = wx_i - flexibility * (px0 - px) / dx_i
-        sy = wy_i - flexibility * (py0 - py) / dx_i
-        # The element's traction: the mean of its edges' (exact for a linear rise).
-        return (px, py), (0.5 * (px0 + px), 0.5 * (py0 + py), jnp.where(slips, sx, 0.0),
-                          jnp.where(slips, sy, 0.0), ~slips)
+        slips = size > bound
+        factor = jnp.where(slips, bound / jnp.where(slips, size, 1.0), 1.0)
+        return tx * factor, ty * factor, slips
+
+    def step(edge, column):
+        """From the element's leading edge half a step to its centre (the traction,
+        slip and stick reported) and on to its trailing edge (the next one's start)."""
+        px0, py0 = edge
+        wx_i, wy_i, g_centre, g_edge, dx_i = column
+        half_step = 0.5 * dx_i / flexibility
+        px, py, slips = saturate(px0 - wx_i * half_step, py0 - wy_i * half_step, g_centre)
+        sx = wx_i - (px0 - px) / half_step
+        sy = wy_i - (py0 - py) / half_step
+        qx, qy, _ = saturate(px - wx_i * half_step, py - wy_i * half_step, g_edge)
+        return (qx, qy), (px, py, jnp.where(slips, sx, 0.0), jnp.where(slips, sy, 0.0),
+                          ~slips)
 
     zero = jnp.zeros(strips, dtype=jnp.float64)
-    columns = (wx.T, wy.T, bound.T, jnp.broadcast_to(dx, (elements, strips)))
+    columns = (wx.T, wy.T, bound_centre.T, bound_edge.T,
+               jnp.broadcast_to(dx, (elements, strips)))
     _, (px, py, sx, sy, stick) = jax.lax.scan(step, (zero, zero), columns)
     px, py, sx, sy, stick = (v.T for v in (px, py, sx, sy, stick))
     keep = lambda v: jnp.where(present, v, 0.0)  # noqa: E731

@@ -80,13 +80,14 @@ def _trapezoid_weights(t, valid):
 
 
 def run_wear(result, vehicle, params, law, wheel_nodes, rail_nodes,
-             flange_angle: float = FLANGE_ANGLE) -> RunWear:
+             flange_angle: float = FLANGE_ANGLE, t_from=0.0) -> RunWear:
     """:class:`RunWear` of ``result`` (an unbatched
     :class:`~jaxrail.simulation.SimulationResult` of ``vehicle`` with ``params``)
     through the wear ``law`` (:mod:`jaxrail.wear.laws`), spread over the grids
-    ``wheel_nodes`` and ``rail_nodes`` [m] (uniform; :func:`~jaxrail.wear.distribution.lateral_grid`)."""
+    ``wheel_nodes`` and ``rail_nodes`` [m] (uniform; :func:`~jaxrail.wear.distribution.lateral_grid`),
+    counting from the output time ``t_from`` [s] on (the distance too)."""
     w = result.wheels
-    valid = jnp.asarray(result.valid)
+    valid = jnp.asarray(result.valid) & (jnp.asarray(result.t) >= t_from)
     weights = _trapezoid_weights(jnp.asarray(result.t), valid)  # (T,)
     q = jnp.where(valid[:, None], result.q, 0.0)
     qdot = jnp.where(valid[:, None], result.qdot, 0.0)

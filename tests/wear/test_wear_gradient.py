@@ -1,0 +1,52 @@
+"""The gradient of wear through a run (forward mode, one tangent per parameter) against
+central differences of the same runs: the bogie entering a 300 m curve
+(``bogie-curve-entry``, fixed steps, its leading outer wheel on the flange root from 0.6
+s), the wear counted from 0.5 s, in the primary longitudinal stiffness, the friction and
+the wheelbase."""
+
+import numpy as np
+import pytest
+
+from jaxrail.scenarios import load_scenario
+from jaxrail.wear import ArchardKTH, wear_gradient
+
+NAMES = ("primary_longitudinal_stiffness", "friction", "wheelbase")
+RELATIVE_STEP = 1e-4  # of each parameter's value
+FD_RTOL = 1e-3
+T_FROM = 0.5  # [s]
+
+
+@pytest.fixture(scope="module")
+def gradient():
+    scenario = load_scenario("bogie-curve-entry")
+    built = scenario.build()
+    model = scenario.contact_model(*built)
+    law = ArchardKTH()
+
+    def at(values=None):
+        return wear_gradient(scenario, NAMES, law, t_from=T_FROM, built=built, model=model,
+                             values=values)
+    return at
+
+
+def _totals(g):
+    """The bogie's total wear per km and its flange part [mm^3/km], and their
+    derivatives (k,)."""
+    return (g.volume_per_km.sum(), g.flange_per_km.sum(),
+            g.d_volume_per_km.sum(axis=(0, 1)), g.d_flange_per_km.sum(axis=(0, 1)))
+
+
+def test_wear_gradient_against_central_differences(gradient):
+    g = gradient()
+    volume, flange, d_volume, d_flange = _totals(g)
+    assert volume > 0.0 and flange > 0.0  # the flange root wears: both derivatives matter
+    for i, name in enumerate(NAMES):
+        h = RELATIVE_STEP * g.values[i]
+        step = np.eye(len(NAMES))[i] * h
+        plus, minus = _totals(gradient(g.values + step)), _totals(gradient(g.values - step))
+        fd_volume = (plus[0] - minus[0]) / (2.0 * h)
+        fd_flange = (plus[1] - minus[1]) / (2.0 * h)
+        assert d_volume[i] == pytest.approx(fd_volume, rel=FD_RTOL), name
+        assert d_flange[i] == pytest.approx(fd_flange, rel=FD_RTOL), name
+        # a derivative that matters: at least 1e-3 of the wear per unit relative change
+        assert abs(d_volume[i] * g.values[i]) > 1e-3 * volume, name
