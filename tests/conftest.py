@@ -72,6 +72,7 @@ def integrations_at_level_1():
 _SLOWEST_FIRST = (
     "tests/vehicles/test_flexible_track.py",
     "tests/vehicles/test_irregular_track.py",
+    "tests/wear/test_route_wear.py",
     "tests/vehicles/test_trailer.py",
     "tests/montecarlo/test_batch.py",
     "tests/stability/test_curving.py",

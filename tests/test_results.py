@@ -243,7 +243,7 @@ def test_file_opens_with_h5py_alone_and_has_units_everywhere(results_file):
         "print(len(names), f['contact/normal_force'].attrs['units'], f.attrs['scenario'])\n")
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                          check=True, cwd=os.path.dirname(results_file))
-    assert out.stdout.split() == ["25", "N", "paper-curve"]  # 25 datasets
+    assert out.stdout.split() == ["27", "N", "paper-curve"]  # 27 datasets
 
 
 def test_layout_units_and_attributes(results_file):

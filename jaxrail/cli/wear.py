@@ -7,6 +7,8 @@ from pathlib import Path
 from .._constants import CONTACT_MODELS
 from ._options import emit_json, json_option, plots_option, quiet_option
 
+COARSE_STEP_MM = 0.5  # [mm] off the profile in one update: warned about
+
 
 def wear_command(args):
     from ..wear.evolution import evolve, step_lengths
@@ -35,6 +37,13 @@ def wear_command(args):
                        max_depth=max_depth)
     attrs = {"route": route.name, "wear_model": route.wear_model, "contact": args.contact}
     summary = evolution_summary(evolution, attrs)
+    coarse = [k + 1 for k, v in enumerate(summary["max_height_loss_per_step_mm"])
+              if v > COARSE_STEP_MM]
+    if coarse and max_depth is None:
+        print(f"jaxrail wear: warning: steps {coarse} took more than {COARSE_STEP_MM:g} mm "
+              "off the profile at once: too coarse for these wear rates (a groove feeds "
+              "itself); give --max-depth 0.1 or a smaller --step (docs/wear.md)",
+              file=sys.stderr)
     emit_json(summary, args.json)
     if args.out:
         print(f"wrote {args.out}", file=sys.stderr)

@@ -66,9 +66,12 @@ class CurvingWear:
     shares) and their gradient in the named parameters ``names``
     (:mod:`jaxrail.vehicles.parameters`):
     ``CurvingWear(curving, names)(speed, params=None, start=None)`` ->
-    :class:`CurvingWearPoint`. ``start``: as :class:`SteadyCurving`'s."""
+    :class:`CurvingWearPoint`. ``start``: as :class:`SteadyCurving`'s. ``measure``:
+    what is differentiated instead of the wear numbers, ``measure(patch_forces, params,
+    speed)`` -> (W, 2) (e.g. :func:`jaxrail.wear.steady.wear_per_km`'s); the point's
+    ``wear_number_n`` then holds its values."""
 
-    def __init__(self, curving: SteadyCurving, names=()):
+    def __init__(self, curving: SteadyCurving, names=(), measure=None):
         self.names = names = tuple(names)
         self.curving = curving
         vehicle, params, track = curving.vehicle, curving.params, curving.track
@@ -84,8 +87,9 @@ class CurvingWear:
             r = curving_residual(u, vehicle, params, moved, base, frame_rate, centre, body,
                                  model)
             q, qdot = curving_state(u, vehicle, base, frame_rate, centre)
-            wear = wheel_wear_numbers(contact_loads(vehicle, params, moved, q, qdot,
-                                                    model)[3])
+            forces = contact_loads(vehicle, params, moved, q, qdot, model)[3]
+            wear = (wheel_wear_numbers(forces) if measure is None
+                    else measure(forces, params, speed))
             return r, wear
 
         def partials(u, x, params, speed):

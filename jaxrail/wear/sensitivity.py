@@ -12,6 +12,7 @@ function of the parameters, which is what a comparison with finite differences n
 
 import dataclasses
 
+import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -54,7 +55,7 @@ def _wear_and_tangents(vehicle, params, track, model, values, law, wheel_nodes, 
     def wear_of(v):
         p, t = set_values_and_track(vehicle, params, track, names, v)
         result = solve(vehicle, p, t, duration, speed, misalignment, options=options,
-                       contact_model=model)
+                       contact_model=model, adjoint=diffrax.ForwardMode())
         wear = run_wear(result, vehicle, p, law, wheel_nodes, rail_nodes, t_from=t_from)
         per_km = 1e9 / (wear.distance[:, None] * 1e-3)
         return jnp.stack([wear.volume * per_km, wear.flange_volume * per_km])

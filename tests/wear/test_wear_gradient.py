@@ -1,8 +1,8 @@
 """The gradient of wear through a run (forward mode, one tangent per parameter) against
 central differences of the same runs: the bogie entering a 300 m curve
 (``bogie-curve-entry``, fixed steps, its leading outer wheel on the flange root from 0.6
-s), the wear counted from 0.5 s, in the primary longitudinal stiffness, the friction and
-the wheelbase."""
+s), the wear volume per km counted from 0.5 s, in the primary longitudinal stiffness, the
+friction and the wheelbase."""
 
 import numpy as np
 import pytest
@@ -11,7 +11,11 @@ from jaxrail.scenarios import load_scenario
 from jaxrail.wear import ArchardKTH, wear_gradient
 
 NAMES = ("primary_longitudinal_stiffness", "friction", "wheelbase")
-RELATIVE_STEP = 1e-4  # of each parameter's value
+# of each parameter's value: the wear of this 0.5 s of curve entry is rough at relative
+# scales of 1e-4 and more (central differences there differ from each other in size and
+# sign: docs/wear.md, "The gradient of wear"); at 1e-5 they have converged to the local
+# derivative (4.8e-4, 2.3e-4 and 6.0e-4 off it), at 1e-6 rounding shows (2e-3 in friction)
+RELATIVE_STEP = 1e-5
 FD_RTOL = 1e-3
 T_FROM = 0.5  # [s]
 
@@ -39,14 +43,15 @@ def _totals(g):
 def test_wear_gradient_against_central_differences(gradient):
     g = gradient()
     volume, flange, d_volume, d_flange = _totals(g)
-    assert volume > 0.0 and flange > 0.0  # the flange root wears: both derivatives matter
+    assert volume > 0.0
+    # the leading outer wheel runs on its flange root (about 30 degrees), below the 0.6
+    # rad that counts as flange: no flange wear here, and none of its derivatives
+    assert flange == 0.0 and np.all(d_flange == 0.0)
     for i, name in enumerate(NAMES):
         h = RELATIVE_STEP * g.values[i]
         step = np.eye(len(NAMES))[i] * h
         plus, minus = _totals(gradient(g.values + step)), _totals(gradient(g.values - step))
         fd_volume = (plus[0] - minus[0]) / (2.0 * h)
-        fd_flange = (plus[1] - minus[1]) / (2.0 * h)
         assert d_volume[i] == pytest.approx(fd_volume, rel=FD_RTOL), name
-        assert d_flange[i] == pytest.approx(fd_flange, rel=FD_RTOL), name
-        # a derivative that matters: at least 1e-3 of the wear per unit relative change
-        assert abs(d_volume[i] * g.values[i]) > 1e-3 * volume, name
+        # a derivative that matters: at least 1e-2 of the wear per unit relative change
+        assert abs(d_volume[i] * g.values[i]) > 1e-2 * volume, name
