@@ -73,6 +73,8 @@ _SLOWEST_FIRST = (
     "tests/vehicles/test_flexible_track.py",
     "tests/vehicles/test_irregular_track.py",
     "tests/wear/test_route_wear.py",
+    "tests/wear/test_wear_gradient.py",
+    "tests/wear/test_steady_wear.py",
     "tests/vehicles/test_trailer.py",
     "tests/montecarlo/test_batch.py",
     "tests/stability/test_curving.py",
