@@ -27,8 +27,9 @@ import numpy as np  # noqa: E402
 from jaxrail.simulation import WheelOutputs  # noqa: E402
 from jaxrail.wear.run_wear import run_wear  # noqa: E402
 
-from jaxrail.wear.evolution import (GRID_SPACING, contact_for, profile_measures,  # noqa: E402
-                                    route_wear, smooth, worn_wheel)
+from jaxrail.vehicles import contact_model  # noqa: E402
+from jaxrail.wear.evolution import (GRID_SPACING, measured_wheel,  # noqa: E402
+                                    profile_measures, route_wear, smooth)
 from jaxrail.wear.distribution import lateral_grid  # noqa: E402
 from jaxrail.wear.route import parse_route  # noqa: E402
 
@@ -104,7 +105,8 @@ def main():
     vehicle, params, track = base.build()
     nodes = lateral_grid(params.wheel.surfaces[0].domain, GRID_SPACING)
     loss = smooth(nodes, np.mean(wear.wheel_depth_per_km, axis=(0, 1))) * 1000.0
-    wheel = worn_wheel(params.wheel, nodes, loss)
+    new = np.asarray(jax.vmap(params.wheel.surfaces[0].height)(jnp.asarray(nodes)))
+    wheel = measured_wheel(nodes, new - loss, params.wheel.nominal_radius)
     start = time.perf_counter()
     measures = profile_measures(wheel, track.rails)
     measures_s = time.perf_counter() - start
@@ -112,7 +114,7 @@ def main():
     if args.contact == "table":
         worn = eqx.tree_at(lambda p: p.wheel, params, wheel)
         start = time.perf_counter()
-        contact_for("table", vehicle, worn, track, cache=False)
+        contact_model("table", vehicle, worn, track, cache=False)
         table_s = time.perf_counter() - start
     rail_nodes = lateral_grid(track.rails.profile.domain, GRID_SPACING)
     outputs = base.solver_options(args.duration).n_outputs

@@ -29,9 +29,7 @@ def wear_command(args):
           f"{args.contact} contact"
           + (" (the worn profile's table is built at every step)" if args.contact == "table"
              else ""), file=sys.stderr)
-    max_depth = None if args.max_depth is None else 1e-3 * args.max_depth
-    if max_depth is not None and not max_depth > 0.0:
-        raise ValueError(f"--max-depth {args.max_depth:g} mm: must be > 0")
+    max_depth = None if args.max_depth is None else 1e-3 * args.max_depth  # checked by evolve
     evolution = evolve(route, args.distance, args.step, args.contact, out=args.out,
                        progress=not args.quiet, overwrite=args.overwrite, say=say,
                        max_depth=max_depth)

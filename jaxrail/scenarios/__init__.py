@@ -15,13 +15,13 @@ format is described in docs/scenarios.md.
 """
 
 import dataclasses
-import importlib.resources
 import math
 import tomllib
 from pathlib import Path
 
 import equinox as eqx
 
+from .._files import builtin_or_file_text
 from ..profiles.named import named_profile
 from . import checks
 from .irregularities import IrregularitySpec, parse_irregularities
@@ -336,21 +336,8 @@ def parse_scenario(text: str, where: str = "<scenario>") -> Scenario:
 
 def load_scenario(name_or_path) -> Scenario:
     """A built-in scenario by name (:data:`BUILTIN`) or a scenario TOML file."""
-    if str(name_or_path) in BUILTIN:
-        text = importlib.resources.files(__package__).joinpath(
-            "data", f"{name_or_path}.toml").read_text()
-        return parse_scenario(text, f"built-in scenario {name_or_path}")
-    path = Path(name_or_path)
-    if not path.exists():
-        raise ValueError(f"unknown scenario {str(name_or_path)!r}: use one of "
-                         f"{', '.join(BUILTIN)} or a .toml file")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except UnicodeDecodeError:
-        raise ValueError(f"{path}: not a text (UTF-8) scenario file") from None
-    except OSError as error:
-        raise ValueError(f"{path}: cannot read the scenario file ({error.strerror})") from None
-    return parse_scenario(text, str(path))
+    return parse_scenario(*builtin_or_file_text(name_or_path, __package__, BUILTIN,
+                                                "scenario"))
 
 
 def prepare_scenario(scenario: Scenario, duration=None):

@@ -73,14 +73,16 @@ class TableContact(eqx.Module):
 
 
 def contact_model(name: str, vehicle: Vehicle, params: VehicleParams, track,
-                  progress: bool = False):
+                  progress: bool = False, cache: bool = True):
     """The contact model called ``name`` (:data:`CONTACT_MODELS`) for the vehicle on
     ``track``: the paper's search, or the table of its wheel on the track's rails (from
-    the cache, or built and cached with a progress bar when ``progress``)."""
+    the cache, or built and cached with a progress bar when ``progress``; with ``cache``
+    False built in memory, neither read from nor written to the cache)."""
     if name == "online":
         return OnlineContact()
     if name == "table":
-        table, _ = contact_table(params.wheel, track.rails, vehicle.config, progress=progress)
+        table, _ = contact_table(params.wheel, track.rails, vehicle.config, progress=progress,
+                                 cache=cache)
         return TableContact(table)
     raise ValueError(f"contact model must be one of {CONTACT_MODELS}, got {name!r}")
 

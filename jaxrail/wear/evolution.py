@@ -34,9 +34,8 @@ from ..profiles import WheelProfile
 from ..profiles.measures import flange_height, flange_qr, flange_thickness
 from ..profiles.tabulated import TabulatedProfile
 from ..simulation.integrate import solve
-from ..vehicles.loads import OnlineContact, TableContact
+from ..vehicles.loads import contact_model
 from ..compilation import compile_program
-from ..contact.table_cache import contact_table
 from .distribution import lateral_grid
 from .route import Route, section_scenario, track_length, wear_start
 from .run_wear import run_wear
@@ -93,18 +92,6 @@ def _batch(vehicle, params, tracks, contact, speeds, misalignments, t_from, law,
     return jax.vmap(one)(tracks, speeds, misalignments, t_from)
 
 
-def contact_for(mode, vehicle, params, track, progress=False, cache=True):
-    """The contact model of ``mode`` for the vehicle's wheel on ``track``'s rails; a
-    worn profile's table is built in memory (``cache`` False)."""
-    if mode == "online":
-        return OnlineContact()
-    if mode != "table":
-        raise ValueError(f"contact must be 'online' or 'table', got {mode!r}")
-    table, _ = contact_table(params.wheel, track.rails, vehicle.config, progress=progress,
-                             cache=cache)
-    return TableContact(table)
-
-
 def route_wear(route: Route, wheel=None, contact=None, progress=False, built=None,
                cache_table=True) -> RouteWear:
     """The wear of ``route`` (module docstring) with ``wheel`` (a
@@ -134,7 +121,7 @@ def route_wear(route: Route, wheel=None, contact=None, progress=False, built=Non
         tracks = [section_scenario(base, s, length).track() for s in sections]
         rail_nodes = lateral_grid(tracks[0].rails.profile.domain, GRID_SPACING)
         if model is None:
-            model = contact_for(mode, vehicle, params, tracks[0], progress, cache_table)
+            model = contact_model(mode, vehicle, params, tracks[0], progress, cache_table)
         args = (vehicle, params, _stack(tracks), model,
                 jnp.asarray([s.speed for s in sections]),
                 jnp.asarray([s.misalignment for s in sections]),
@@ -151,24 +138,33 @@ def route_wear(route: Route, wheel=None, contact=None, progress=False, built=Non
             parts[k] = jax.tree.map(lambda x: x[i], host)
             completed[k] = bool(np.asarray(done)[i])
             per_km[k] = np.asarray(parts[k].volume_per_km())
-    volume = np.einsum("s,swj->wj", shares, per_km)
     flange_per_km = np.stack([np.asarray(p.flange_fraction()) for p in parts]) * per_km
-    flange = np.einsum("s,swj->wj", shares, flange_per_km)
     depths = np.stack([np.asarray(p.wheel_depth_per_km()) for p in parts])
-    depth = np.einsum("s,swjk->wjk", shares, depths)
-    rail = np.einsum("s,sjk->jk", shares,
-                     np.stack([np.asarray(p.rail_depth_per_pass()) for p in parts]))
+    volume, fraction, depth, rail = _mix(
+        shares, per_km, flange_per_km, depths,
+        np.stack([np.asarray(p.rail_depth_per_pass()) for p in parts]))
     total = np.array([np.sum(p.volume) for p in parts])
     outside = np.array([np.sum(p.extrapolated_volume) for p in parts])
     return RouteWear(
-        volume_per_km=volume,
-        flange_fraction=np.where(volume > 0, flange / np.where(volume > 0, volume, 1.0), 0.0),
+        volume_per_km=volume, flange_fraction=fraction,
         wheel_depth_per_km=depth, rail_depth_per_pass=rail,
         extrapolated_fraction=float(np.sum(outside) / max(np.sum(total), 1e-300)),
         sections_volume_per_km=per_km, sections_flange_per_km=flange_per_km,
         sections_depth_per_km=depths, wheel_nodes=np.asarray(wheel_nodes),
         rail_nodes=np.asarray(parts[0].rail_nodes), completed=completed, run_s=run_s,
         compile_s=compile_s)
+
+
+def _mix(weights, volume_per_km, flange_per_km, depth_per_km, rail_depth):
+    """Weighted means over parts (leading axis S, ``weights`` (S,) summing to 1) of the
+    wear per km (S, W, 2) [mm^3/km], its flange part, the wheels' depth per km (S, W, 2,
+    K) and the rails' depth per pass (S, 2, Kr): ``(volume, flange fraction of the
+    mean volume, depth, rail depth)``."""
+    volume = np.einsum("s,swj->wj", weights, volume_per_km)
+    flange = np.einsum("s,swj->wj", weights, flange_per_km)
+    fraction = np.where(volume > 0, flange / np.where(volume > 0, volume, 1.0), 0.0)
+    return (volume, fraction, np.einsum("s,swjk->wjk", weights, depth_per_km),
+            np.einsum("s,sjk->jk", weights, rail_depth))
 
 
 def smooth(nodes, values, sigma=SMOOTHING):
@@ -184,17 +180,12 @@ def smooth(nodes, values, sigma=SMOOTHING):
     return kernel @ np.asarray(values)
 
 
-def worn_wheel(wheel: WheelProfile, nodes, height_loss, name="worn wheel") -> WheelProfile:
-    """``wheel`` with ``height_loss`` (K,) [m] taken off its profile at ``nodes`` (K,)
-    [m]: a measured profile through the worn heights (natural spline)."""
-    if len(wheel.surfaces) != 1:
-        raise ValueError(f"wear evolution needs a wheel of one surface (a real profile); "
-                         f"{wheel.name!r} has {len(wheel.surfaces)} (the paper's simplified "
-                         "profile)")
-    surface = wheel.surfaces[0]
-    heights = np.asarray(jax.vmap(surface.height)(jnp.asarray(nodes))) - np.asarray(height_loss)
-    profile = TabulatedProfile.from_points(np.asarray(nodes), heights, name=name)
-    return WheelProfile((profile,), wheel.nominal_radius, name=name)
+def measured_wheel(nodes, heights, nominal_radius, name="worn") -> WheelProfile:
+    """A one-surface wheel whose profile is the natural spline through ``heights`` (K,)
+    [m] at ``nodes`` (K,) [m] (a measured profile), of ``nominal_radius`` [m]."""
+    return WheelProfile((TabulatedProfile.from_points(np.asarray(nodes), np.asarray(heights),
+                                                      name=name),),
+                        nominal_radius, name=name)
 
 
 def profile_measures(wheel: WheelProfile, rails) -> dict:
@@ -242,15 +233,14 @@ def _append(evolution, name, value):
     evolution[name] = np.concatenate([evolution[name], np.asarray(value)[None]])
 
 
-def _run_step(route, wheel, contact, built, length, nodes, max_depth, first, say):
-    """One step of ``length`` [km]: the route run with ``wheel``, in sub-steps that take
+def _run_step(route, wheel, heights, contact, built, length, nodes, max_depth, first, say):
+    """One step of ``length`` [km]: the route run with ``wheel`` (its profile ``heights``
+    [m] at ``nodes``), in sub-steps that take
     at most ``max_depth`` [m] off the profile (None: one), the profile worn between
     them. Returns the step's record: per-km quantities weighted by the sub-steps'
     lengths (the flange fraction by their volumes), the height loss [m] it took off, the
     sub-steps' count and their :class:`RouteWear`."""
     remaining, parts, lengths, loss = length, [], [], np.zeros(len(nodes))
-    surface = wheel.surfaces[0]
-    start = np.asarray(jax.vmap(surface.height)(jnp.asarray(nodes)))
     while remaining > 1e-9 * length:
         wear = route_wear(route, wheel, contact, built=built,
                           cache_table=(first and not parts))
@@ -266,22 +256,15 @@ def _run_step(route, wheel, contact, built, length, nodes, max_depth, first, say
             if say is not None:
                 say(f"  sub-step {len(parts)}: {part:.4g} km (at most {1e3 * max_depth:g} mm "
                     f"off the profile), {remaining:.4g} km left in the step")
-            wheel = WheelProfile((TabulatedProfile.from_points(nodes, start - loss,
-                                                               name="worn"),),
-                                 wheel.nominal_radius, name="worn")
-    w = np.asarray(lengths) / length
-    volume = np.einsum("s,swj->wj", w, np.stack([p.volume_per_km for p in parts]))
-    flange = np.einsum("s,swj->wj", w, np.stack([p.volume_per_km * p.flange_fraction
-                                                  for p in parts]))
-    return {"volume_per_km": volume,
-            "flange_fraction": np.where(volume > 0, flange / np.where(volume > 0, volume, 1),
-                                        0.0),
-            "depth_per_km": np.einsum("s,swjk->wjk", w,
-                                      np.stack([p.wheel_depth_per_km for p in parts])),
-            "height_loss": loss,
-            "depth_per_pass": np.einsum("s,sjk->jk", w,
-                                        np.stack([p.rail_depth_per_pass for p in parts])),
-            "substeps": len(parts), "route_wear": parts}
+            wheel = measured_wheel(nodes, heights - loss, wheel.nominal_radius)
+    stack = lambda field: np.stack([getattr(p, field) for p in parts])  # noqa: E731
+    volume, fraction, depth, rail = _mix(
+        np.asarray(lengths) / length, stack("volume_per_km"),
+        stack("volume_per_km") * stack("flange_fraction"), stack("wheel_depth_per_km"),
+        stack("rail_depth_per_pass"))
+    return {"volume_per_km": volume, "flange_fraction": fraction, "depth_per_km": depth,
+            "height_loss": loss, "depth_per_pass": rail, "substeps": len(parts),
+            "route_wear": parts}
 
 
 def evolve(route: Route, distance_km: float, step_km: float, contact: str = "table",
@@ -338,8 +321,8 @@ def evolve(route: Route, distance_km: float, step_km: float, contact: str = "tab
     done = len(evolution["wear/height_loss"])
     heights = evolution["profile_height"][-1]
     if done:
-        wheel = WheelProfile((TabulatedProfile.from_points(nodes, heights, name="worn"),),
-                             wheel.nominal_radius, name=f"{route.name} {evolution['distance_km'][-1]:g} km")
+        wheel = measured_wheel(nodes, heights, wheel.nominal_radius,
+                               name=f"{route.name} {evolution['distance_km'][-1]:g} km")
         if say is not None:
             say(f"resuming from step {done} of {len(steps)} "
                 f"({evolution['distance_km'][-1]:g} km) in {out}")
@@ -352,13 +335,13 @@ def evolve(route: Route, distance_km: float, step_km: float, contact: str = "tab
     for k in range(done, len(steps)):
         if say is not None and contact == "table" and k > 0:
             say(f"step {k + 1}: building the worn profile's contact table (in memory)")
-        step = _run_step(route, wheel, contact, built, steps[k], nodes, max_depth,
+        step = _run_step(route, wheel, heights, contact, built, steps[k], nodes, max_depth,
                          first=(k == 0), say=say)
         kept.extend(step["route_wear"])
         heights = heights - step["height_loss"]
         distance = evolution["distance_km"][-1] + steps[k]
-        wheel = WheelProfile((TabulatedProfile.from_points(nodes, heights, name="worn"),),
-                             wheel.nominal_radius, name=f"{route.name} {distance:g} km")
+        wheel = measured_wheel(nodes, heights, wheel.nominal_radius,
+                               name=f"{route.name} {distance:g} km")
         measures = profile_measures(wheel, track.rails)
         _append(evolution, "distance_km", distance)
         _append(evolution, "profile_height", heights)

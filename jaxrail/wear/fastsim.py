@@ -102,11 +102,12 @@ def _flexibility(a, b, xi, eta, phi, G, nu):
     return jnp.where(moving, weighted, l1)
 
 
-def _scaled(shape_value, area, total):
-    """``shape_value`` scaled so that its sum times ``area`` is ``total``."""
+def _scale(shape_value, area, total):
+    """The factor that makes ``shape_value``'s sum times ``area`` equal ``total`` (0 for
+    a shape that sums to 0)."""
     integral = jnp.sum(shape_value * area)
     loaded = integral > 0.0
-    return shape_value * jnp.where(loaded, total / jnp.where(loaded, integral, 1.0), 0.0)
+    return jnp.where(loaded, total / jnp.where(loaded, integral, 1.0), 0.0)
 
 
 def fastsim_patch(
@@ -143,15 +144,13 @@ def fastsim_patch(
     parabola = lambda x: jnp.maximum(1.0 - (x / a_s) ** 2 - (y / b_s) ** 2, 0.0)  # noqa: E731
     inside = parabola(x)
     # One factor scales the parabolic pressure at the centres and at the trailing edges.
-    integral = jnp.sum(inside * area)
-    loaded = integral > 0.0
-    scale = jnp.where(loaded, n_s / jnp.where(loaded, integral, 1.0), 0.0)
+    scale = _scale(inside, area, n_s)
     bound_centre = mu * scale * inside
     bound_edge = mu * scale * parabola(x - 0.5 * dx[:, None])
     # sqrt's slope is infinite at 0: element centres never reach the rim, the guard
     # only keeps an empty patch finite.
-    hertz = _scaled(jnp.sqrt(jnp.where(inside > 0.0, inside, 1.0)) * (inside > 0.0),
-                    area, n_s)
+    hertz_shape = jnp.sqrt(jnp.where(inside > 0.0, inside, 1.0)) * (inside > 0.0)
+    hertz = hertz_shape * _scale(hertz_shape, area, n_s)
 
     flexibility = _flexibility(a_s, b_s, xi, eta, phi, G, nu)
     wx = xi - phi * y  # (S, E) rigid slip at the element centres

@@ -28,13 +28,12 @@ length, so the curved sections run as one batch and the straights as another.
 """
 
 import dataclasses
-import importlib.resources
 import math
 import tomllib
-from pathlib import Path
 
 import numpy as np
 
+from .._files import builtin_or_file_text
 from ..scenarios import load_scenario
 from .laws import MODELS, wear_law
 
@@ -225,19 +224,7 @@ def parse_route(text: str, where: str = "<route>") -> Route:
 
 def load_route(name_or_path) -> Route:
     """A built-in route by name (:data:`BUILTIN`) or a route TOML file."""
-    if str(name_or_path) in BUILTIN:
-        text = importlib.resources.files(__package__).joinpath(
-            "data", f"{name_or_path}.toml").read_text()
-        return parse_route(text, f"built-in route {name_or_path}")
-    path = Path(name_or_path)
-    if not path.exists():
-        raise ValueError(f"unknown route {str(name_or_path)!r}: use one of "
-                         f"{', '.join(BUILTIN)} or a .toml file")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        raise ValueError(f"{path}: cannot read the route file ({error})") from None
-    return parse_route(text, str(path))
+    return parse_route(*builtin_or_file_text(name_or_path, __package__, BUILTIN, "route"))
 
 
 REAR_START = 5.0  # [m] where a run starts the vehicle's rearmost body (initial_state's s0)

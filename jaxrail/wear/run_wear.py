@@ -49,9 +49,13 @@ class RunWear(eqx.Module):
     rail_volume: Float[Array, "2 Kr"]
     wheel_radius: Float[Array, ""]
 
+    def per_km(self, volume):
+        """(W, 2) [mm^3/km]: a volume per wheel (W, 2) [m^3] per km run."""
+        return volume * 1e9 / (self.distance[:, None] * 1e-3)
+
     def volume_per_km(self):
         """(W, 2) [mm^3/km]: each wheel's wear volume per km run."""
-        return self.volume * 1e9 / (self.distance[:, None] * 1e-3)
+        return self.per_km(self.volume)
 
     def flange_fraction(self):
         """(W, 2) [-]: the share of each wheel's wear volume on its flange (0 where it
@@ -112,9 +116,9 @@ def run_wear(result, vehicle, params, law, wheel_nodes, rail_nodes,
                     * weights[:, None, None, None, None])  # (T, W, 2, P, S) [m^3]
     patch_volume = jnp.sum(strip_volume, axis=-1)
     extrapolated = patches.extrapolated_rate.reshape(shape) * weights[:, None, None, None]
-    on_flange = clean(w.contact_angle) > flange_angle
-    offsets = patches.strip_offset.reshape(shape + (strips,))
     angle = clean(w.contact_angle)
+    on_flange = angle > flange_angle
+    offsets = patches.strip_offset.reshape(shape + (strips,))
     sides = jnp.asarray(SIDE_SIGNS)[None, None, :, None, None]
     wheel_at = strip_positions(clean(w.y_wheel), angle, offsets, sides)
     rail_at = strip_positions(clean(w.y_rail), angle, offsets, sides)

@@ -57,8 +57,7 @@ def _wear_and_tangents(vehicle, params, track, model, values, law, wheel_nodes, 
         result = solve(vehicle, p, t, duration, speed, misalignment, options=options,
                        contact_model=model, adjoint=diffrax.ForwardMode())
         wear = run_wear(result, vehicle, p, law, wheel_nodes, rail_nodes, t_from=t_from)
-        per_km = 1e9 / (wear.distance[:, None] * 1e-3)
-        return jnp.stack([wear.volume * per_km, wear.flange_volume * per_km])
+        return jnp.stack([wear.per_km(wear.volume), wear.per_km(wear.flange_volume)])
 
     basis = jnp.eye(values.shape[0], dtype=values.dtype)
     primal, tangents = jax.vmap(lambda e: jax.jvp(wear_of, (values,), (e,)),
