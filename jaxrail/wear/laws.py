@@ -21,6 +21,9 @@ steps cannot see (the elements crossing an edge). Each edge is therefore blended
 published values hold exactly, and 0 gives the published steps.
 """
 
+import dataclasses
+import math
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -105,16 +108,20 @@ class ArchardKTH(eqx.Module):
     def check(self):
         """A clear error when a wear coefficient lies outside its published range
         (host values; before anything compiles)."""
-        for name, (low, high) in KTH_RANGES.items():
-            value = float(getattr(self, name))
-            if not low <= value <= high:
-                raise ValueError(
-                    f"wear model archard-kth: {name} = {value:g} lies outside the KTH "
-                    f"map's published range [{low:g}, {high:g}] (Jendel 2002)")
-        if not float(self.hardness) > 0.0:
-            raise ValueError(f"wear model archard-kth: hardness must be > 0 Pa, got "
-                             f"{float(self.hardness):g}")
+        check_fields("archard-kth", {name: float(getattr(self, name))
+                                     for name in ("hardness", *KTH_RANGES)})
         return self
+
+    @staticmethod
+    def _check_values(values: dict) -> None:
+        for name, (low, high) in KTH_RANGES.items():
+            if name in values and not low <= values[name] <= high:
+                raise ValueError(
+                    f"wear model archard-kth: {name} = {values[name]:g} lies outside the "
+                    f"KTH map's published range [{low:g}, {high:g}] (Jendel 2002)")
+        if "hardness" in values and not values["hardness"] > 0.0:
+            raise ValueError(f"wear model archard-kth: hardness must be > 0 Pa, got "
+                             f"{values['hardness']:g}")
 
 
 KTH_RANGES = {"k1": (1e-4, 10e-4), "k2": (30e-4, 40e-4), "k3": (1e-4, 10e-4),
@@ -176,16 +183,43 @@ class USFD(eqx.Module):
 
     def check(self):
         """A clear error for a density that is not positive."""
-        if not float(self.density) > 0.0:
-            raise ValueError(f"wear model usfd: density must be > 0 kg/m^3, got "
-                             f"{float(self.density):g}")
+        check_fields("usfd", {"density": float(self.density)})
         return self
+
+    @staticmethod
+    def _check_values(values: dict) -> None:
+        if "density" in values and not values["density"] > 0.0:
+            raise ValueError(f"wear model usfd: density must be > 0 kg/m^3, got "
+                             f"{values['density']:g}")
+
+
+_LAWS = {"archard-kth": ArchardKTH, "usfd": USFD}
+
+
+def check_fields(name: str, fields: dict) -> None:
+    """A clear error for an unknown model ``name``, a field it does not have, a value
+    that is not a number, or one outside its published range; on plain values, so a
+    route file is checked without building the law (no JAX)."""
+    if name not in _LAWS:
+        raise ValueError(f"unknown wear model {name!r}: use one of {', '.join(MODELS)}")
+    law = _LAWS[name]
+    known = [f.name for f in dataclasses.fields(law)]
+    unknown = sorted(set(fields) - set(known))
+    if unknown:
+        raise ValueError(f"wear model {name}: unknown field(s) {unknown}; it has "
+                         f"{', '.join(known)}")
+    values = {}
+    for key, value in fields.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value):
+            raise ValueError(f"wear model {name}: {key} must be a finite number, got "
+                             f"{value!r}")
+        values[key] = float(value)
+    law._check_values(values)
 
 
 def wear_law(name: str, **fields):
     """The wear law ``name`` (one of :data:`MODELS`) with ``fields`` overriding its
     defaults; a clear error for an unknown name."""
-    laws = {"archard-kth": ArchardKTH, "usfd": USFD}
-    if name not in laws:
-        raise ValueError(f"unknown wear model {name!r}: use one of {', '.join(MODELS)}")
-    return laws[name](**fields).check()
+    check_fields(name, fields)
+    return _LAWS[name](**fields)

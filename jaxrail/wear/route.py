@@ -35,7 +35,7 @@ import numpy as np
 
 from .._files import builtin_or_file_text
 from ..scenarios import load_scenario
-from .laws import MODELS, wear_law
+from .laws import MODELS, check_fields, wear_law
 
 LEAD = 10.0  # [m] of straight before a section's body
 SETTLE_DISTANCE = 20.0  # [m] run past the body's start by the last wheelset before wear counts
@@ -195,8 +195,8 @@ def parse_route(text: str, where: str = "<route>") -> Route:
     if not isinstance(wear, dict):
         raise ValueError(f"{where}: [wear] must be a table of the law's fields")
     try:
-        wear_law(model, **wear)
-    except (TypeError, ValueError) as error:
+        check_fields(model, wear)
+    except ValueError as error:
         raise ValueError(f"{where}: [wear]: {error}") from None
     route = Route(name=str(raw["name"]), description=str(raw.get("description", "")),
                   scenario=str(raw["scenario"]),

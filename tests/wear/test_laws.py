@@ -6,6 +6,8 @@ conversion, the input checks, and the blended map's derivatives against central
 differences."""
 
 import math
+import subprocess
+import sys
 
 import jax
 import jax.numpy as jnp
@@ -13,7 +15,7 @@ import numpy as np
 import pytest
 
 from jaxrail.wear.fastsim import PatchGrid, fastsim_patch
-from jaxrail.wear.laws import KTH_RANGES, MODELS, USFD, ArchardKTH, wear_law
+from jaxrail.wear.laws import KTH_RANGES, MODELS, USFD, ArchardKTH, check_fields, wear_law
 
 N, MU, A, B = 8.0e4, 0.4, 6.0e-3, 5.0e-3
 H = 2.45e9  # the default hardness [Pa]
@@ -207,6 +209,45 @@ def test_wear_law_accepts_in_range_and_returns_the_law():
     assert isinstance(wear_law("usfd"), USFD)
     with pytest.raises(ValueError, match="hardness"):
         wear_law("archard-kth", hardness=0.0)
+
+
+@pytest.mark.parametrize("fields,words", [
+    ({"k9": 1e-4}, ["k9", "k1", "hardness"]),
+    ({"k2": "32e-4"}, ["k2", "finite number"]),
+    ({"k2": True}, ["k2", "finite number"]),
+    ({"hardness": float("nan")}, ["hardness", "finite number"]),
+])
+def test_check_fields_names_what_is_wrong(fields, words):
+    with pytest.raises(ValueError) as err:
+        check_fields("archard-kth", fields)
+    for word in words:
+        assert word in str(err.value)
+
+
+def test_a_route_file_is_checked_without_building_the_law():
+    """parse_route checks [wear] on plain numbers: with float64 off and warnings as
+    errors, building the law (a float64 JAX array) would raise; parsing does not, and
+    building it afterwards does (so the probe can fail)."""
+    route = "\n".join(['name = "r"', 'scenario = "paper-curve"', "duration = 10.0",
+                       "[wear]", "k2 = 32e-4", "[[sections]]", "weight = 1.0",
+                       "speed = 20.0", "radius = 500.0", "cant = 0.1", ""])
+    program = "\n".join([
+        "import jax, warnings",
+        "jax.config.update('jax_enable_x64', False)",
+        "warnings.simplefilter('error')",
+        "from jaxrail.wear.route import parse_route",
+        f"route = parse_route({route!r})",
+        "assert route.wear == {'k2': 32e-4}",
+        "try:",
+        "    route.law()",
+        "except UserWarning as warning:",
+        "    assert 'float64' in str(warning)",
+        "else:",
+        "    raise SystemExit('building the law did not warn')",
+    ])
+    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
 
 
 def test_usfd_negative_density_raises():
