@@ -83,7 +83,7 @@ BAD_INPUTS = [
     (["wear", "curved-route", "--distance", "1000", "--step", "2000"],
      "--step 2000 km is larger than --distance 1000 km"),
     (["wear", "nofile.toml"], "unknown route 'nofile.toml': use one of straight-route, "
-                              "curved-route or a .toml file"),
+                              "curved-route, main-line-route or a .toml file"),
 ]
 
 

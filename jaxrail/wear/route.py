@@ -41,7 +41,7 @@ LEAD = 10.0  # [m] of straight before a section's body
 SETTLE_DISTANCE = 20.0  # [m] run past the body's start by the last wheelset before wear counts
 MIN_TRANSITION = 20.0  # [m]
 RAMP = 400.0  # transition length per metre of cant [-]
-BUILTIN = ("straight-route", "curved-route")
+BUILTIN = ("straight-route", "curved-route", "main-line-route")
 _KEYS = {"name", "description", "scenario", "duration", "wear_model", "wear", "sections",
          "settle"}
 _SECTION_KEYS = {"weight", "radius", "cant", "direction", "speed", "seed", "misalignment",
