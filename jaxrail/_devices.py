@@ -67,3 +67,55 @@ def devices_may_stall(devices, process_index: int = 0) -> bool:
     pool (see the module docstring)."""
     cpu = [d for d in devices if d.platform == "cpu" and d.process_index == process_index]
     return len(cpu) > 1 and pool_threads() <= len(cpu)
+
+
+def warn_if_devices_may_stall(devices, process_index: int = 0) -> None:
+    """A warning when ``devices`` may stall each other (:func:`devices_may_stall`)."""
+    if devices_may_stall(devices, process_index):
+        import warnings
+
+        warnings.warn(f"{len(devices)} CPU devices share XLA's thread pool of "
+                      f"{pool_threads()} threads: a batch may run its parts one after the "
+                      "other or hang; start the process with jaxrail.use_host_devices(N) "
+                      f"(or set {POOL_THREADS} to the cores plus the devices), see "
+                      "docs/montecarlo.md", stacklevel=3)
+
+
+def split_rows(x, devices, axis: str = "batch"):
+    """``x`` (host, leading batch axis) as a global array whose rows are split over
+    ``devices``; on several hosts each feeds the rows its own devices hold."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+    from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+    devices = list(devices)
+    if len(devices) == 1:
+        return jax.device_put(jnp.asarray(x), devices[0])
+    sharding = NamedSharding(Mesh(np.array(devices), (axis,)), PartitionSpec(axis))
+    if jax.process_count() == 1:
+        return jax.device_put(jnp.asarray(x), sharding)
+    return jax.make_array_from_callback(x.shape, sharding, lambda index: x[index])
+
+
+def over_devices(function, devices, shared: tuple, rows: tuple, axis: str = "batch"):
+    """``function(*shared, *rows)`` with the leading axis of every array in ``rows``
+    split over ``devices`` (``jax.shard_map``: each device runs its own rows, with no
+    communication) and ``shared`` replicated; the result is split likewise. On one
+    device, the plain call. Traceable: call it inside a jitted function."""
+    if len(devices) == 1:
+        return function(*shared, *rows)
+    import equinox as eqx
+    import jax
+    import numpy as np
+    from jax.sharding import Mesh, PartitionSpec
+
+    arrays, fixed = eqx.partition(shared, eqx.is_array)
+    spec = PartitionSpec(axis)
+
+    def local(arrays, *rows):
+        return function(*eqx.combine(arrays, fixed), *rows)
+
+    return jax.shard_map(local, mesh=Mesh(np.array(devices), (axis,)),
+                         in_specs=(PartitionSpec(),) + (spec,) * len(rows), out_specs=spec,
+                         check_vma=False)(arrays, *rows)

@@ -84,6 +84,7 @@ BAD_INPUTS = [
      "--step 2000 km is larger than --distance 1000 km"),
     (["wear", "nofile.toml"], "unknown route 'nofile.toml': use one of straight-route, "
                               "curved-route, main-line-route or a .toml file"),
+    (["wear", "straight-route", "--host-devices", "0"], "host devices: need a count >= 1"),
 ]
 
 

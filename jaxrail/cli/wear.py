@@ -11,6 +11,10 @@ COARSE_STEP_MM = 0.5  # [mm] off the profile in one update: warned about
 
 
 def wear_command(args):
+    if args.host_devices is not None:  # before anything starts JAX's devices
+        from .._devices import use_host_devices
+
+        use_host_devices(args.host_devices)
     from ..wear.evolution import evolve, step_lengths
     from ..wear.route import load_route
     from ..wear.summary import evolution_summary
@@ -73,6 +77,9 @@ def add_parser(commands):
                       help="split each step so that no update takes more than MM off the "
                            "wheel profile (the route run again on the profile worn so far; "
                            "default: one update per step)")
+    wear.add_argument("--host-devices", type=int, metavar="N",
+                      help="split each batch of sections over N CPU devices run side by side "
+                           "(e.g. one per core; sets XLA_FLAGS, see docs/montecarlo.md)")
     wear.add_argument("--overwrite", action="store_true",
                       help="start again even if --out holds another evolution")
     plots_option(wear, "write the figures (worn profiles, measures, wear distribution) "

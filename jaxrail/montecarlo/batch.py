@@ -23,15 +23,12 @@ them, and each host feeds the rows of the chunk that its own devices hold
 """
 
 import time
-import warnings
 
 import equinox as eqx
 import jax
-import jax.numpy as jnp
 import numpy as np
-from jax.sharding import NamedSharding, PartitionSpec
 
-from .._devices import POOL_THREADS, devices_may_stall, pool_threads
+from .._devices import over_devices, split_rows, warn_if_devices_may_stall
 from . import coordination
 from ..compilation import compile_program
 from ..vehicles.parameters import set_values_and_track
@@ -71,39 +68,14 @@ def batched_solve(vehicle, params, track, contact, values, speed, misalignment, 
 def _sharded_solve(vehicle, params, track, contact, values, speed, misalignment, seed, scale,
                    *, devices, **static):
     """:func:`batched_solve` with the batch split over ``devices`` (a tuple): each
-    device runs its rows alone (``jax.shard_map``), the model replicated."""
-    if len(devices) == 1:
-        return batched_solve(vehicle, params, track, contact, values, speed, misalignment, seed,
-                             scale, **static)
-    model, fixed = eqx.partition((vehicle, params, track, contact), eqx.is_array)
-    mesh = jax.sharding.Mesh(np.array(devices), (AXIS,))
-    rows = PartitionSpec(AXIS)
-
-    def local(model, values, speed, misalignment, seed, scale):
-        vehicle, params, track, contact = eqx.combine(model, fixed)
-        return batched_solve(vehicle, params, track, contact, values, speed, misalignment, seed,
-                             scale, **static)
-
-    return jax.shard_map(local, mesh=mesh,
-                         in_specs=(PartitionSpec(), rows, rows, rows, rows, rows),
-                         out_specs=rows, check_vma=False)(model, values, speed, misalignment,
-                                                          seed, scale)
+    device runs its rows alone (:func:`jaxrail._devices.over_devices`), the model
+    replicated."""
+    return over_devices(lambda *args: batched_solve(*args, **static), devices,
+                        (vehicle, params, track, contact),
+                        (values, speed, misalignment, seed, scale), AXIS)
 
 
 _sharded_jit = eqx.filter_jit(_sharded_solve)
-
-
-def _put(x, devices):
-    """``x`` (host, leading batch axis) as a global array split over ``devices``; on
-    several hosts each feeds the rows its own devices hold."""
-    devices = list(devices)
-    if len(devices) == 1:
-        return jax.device_put(jnp.asarray(x), devices[0])
-    sharding = NamedSharding(jax.sharding.Mesh(np.array(devices), (AXIS,)),
-                             PartitionSpec(AXIS))
-    if jax.process_count() == 1:
-        return jax.device_put(jnp.asarray(x), sharding)
-    return jax.make_array_from_callback(x.shape, sharding, lambda index: x[index])
 
 
 BARRIER_TIMEOUT_S = 24 * 3600  # a chunk may run for hours; a dead host ends it sooner
@@ -158,12 +130,7 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
     recompile. Returns (compile time [s], 0 if cached; run time [s]; the chunk used,
     :func:`chunk_size`)."""
     devices = tuple(jax.devices() if devices is None else devices)
-    if devices_may_stall(devices, jax.process_index()):
-        warnings.warn(f"{len(devices)} CPU devices share XLA's thread pool of "
-                      f"{pool_threads()} threads: a chunk may run its parts one after the "
-                      "other or hang; start the process with jaxrail.use_host_devices(N) "
-                      f"(or set {POOL_THREADS} to the cores plus the devices), see "
-                      "docs/montecarlo.md", stacklevel=2)
+    warn_if_devices_may_stall(devices, jax.process_index())
     n = len(inputs[0])
     chunk = chunk_size(chunk, n, len(devices), devices[0].platform)
     bar = None
@@ -179,7 +146,7 @@ def run_chunks(model, inputs, chunk, devices=None, progress=False, on_chunk=None
                 bar.update(stop - start)
             continue
         rows = np.concatenate([np.arange(start, stop), np.full(chunk - (stop - start), stop - 1)])
-        args = model + tuple(_put(np.asarray(x)[rows], devices) for x in inputs)
+        args = model + tuple(split_rows(np.asarray(x)[rows], devices, AXIS) for x in inputs)
         compiled, seconds = compile_program(_sharded_jit, *args, devices=devices, **static)
         compile_s += seconds
         t0 = time.perf_counter()

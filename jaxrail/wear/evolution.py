@@ -4,7 +4,8 @@
 curved sections as one batch, the straights as another), each run's wear
 (:func:`~jaxrail.wear.run_wear.run_wear`) from the time its section's body is reached,
 and the route's wear per km as the sections' wear per km weighted by their shares of
-the distance.
+the distance. A group's runs are split over the devices (several CPU devices with
+:func:`jaxrail.use_host_devices`), padded to a multiple of them.
 
 :func:`evolve`: from the scenario's wheel, per step of ``step`` km: run the route, take
 the wheels' mean height loss per km (one wheel profile serves every wheel of a
@@ -35,12 +36,14 @@ from ..profiles.measures import flange_height, flange_qr, flange_thickness
 from ..profiles.tabulated import TabulatedProfile
 from ..simulation.integrate import solve
 from ..vehicles.loads import contact_model
+from .._devices import over_devices, split_rows, warn_if_devices_may_stall
 from ..compilation import compile_program
 from .distribution import lateral_grid
 from .route import Route, section_scenario, track_length, wear_start
 from .run_wear import run_wear
 
 GRID_SPACING = 0.5e-3  # [m] of the wheel and rail grids
+AXIS = "sections"  # the mesh axis the sections are split along
 SMOOTHING = 1.0e-3  # [m] standard deviation of the Gaussian smoothing the height loss
 CONICITY_AMPLITUDE_MM = 3.0
 CONICITY_SHIFTS_MM = np.arange(-10.0, 10.0 + 1e-9, 0.25)
@@ -79,10 +82,9 @@ def _stack(trees):
     return jax.tree.map(lambda *xs: jnp.stack(xs), *trees)
 
 
-@eqx.filter_jit
-def _batch(vehicle, params, tracks, contact, speeds, misalignments, t_from, law,
-           wheel_nodes, rail_nodes, *, duration, options):
-    """The runs of one group of sections and their wear (batched over the sections)."""
+def _sections(vehicle, params, contact, law, wheel_nodes, rail_nodes, tracks, speeds,
+              misalignments, t_from, *, duration, options):
+    """The runs of one group of sections and their wear (vmapped over the sections)."""
     def one(track, speed, misalignment, start):
         result = solve(vehicle, params, track, duration, speed, misalignment,
                        options=options, contact_model=contact)
@@ -92,13 +94,24 @@ def _batch(vehicle, params, tracks, contact, speeds, misalignments, t_from, law,
     return jax.vmap(one)(tracks, speeds, misalignments, t_from)
 
 
+@eqx.filter_jit
+def _batch(shared, rows, *, devices, **static):
+    """:func:`_sections` with the sections (``rows``) split over ``devices``."""
+    return over_devices(lambda *args: _sections(*args, **static), devices, shared, rows,
+                        AXIS)
+
+
 def route_wear(route: Route, wheel=None, contact=None, progress=False, built=None,
-               cache_table=True) -> RouteWear:
+               cache_table=True, devices=None) -> RouteWear:
     """The wear of ``route`` (module docstring) with ``wheel`` (a
     :class:`~jaxrail.profiles.WheelProfile`; default the scenario's); ``contact``
     ``"online"`` or ``"table"`` (default the scenario's mode); ``built``: the base
-    scenario's ``build()`` to reuse."""
+    scenario's ``build()`` to reuse; ``devices``: the devices each group's runs are
+    split over (default all: several CPU devices with
+    :func:`jaxrail.use_host_devices`)."""
     base = route.base()
+    devices = tuple(jax.devices() if devices is None else devices)
+    warn_if_devices_may_stall(devices)
     vehicle, params, _ = base.build() if built is None else built
     if wheel is not None:
         params = eqx.tree_at(lambda p: p.wheel, params, wheel)
@@ -118,20 +131,22 @@ def route_wear(route: Route, wheel=None, contact=None, progress=False, built=Non
     for curved, members in groups.items():
         sections = [route.sections[k] for k in members]
         length = track_length(route, sections)
-        tracks = [section_scenario(base, s, length).track() for s in sections]
+        padded = sections + [sections[-1]] * (-len(sections) % len(devices))
+        tracks = [section_scenario(base, s, length).track() for s in padded]
         rail_nodes = lateral_grid(tracks[0].rails.profile.domain, GRID_SPACING)
         if model is None:
             model = contact_model(mode, vehicle, params, tracks[0], progress, cache_table)
-        args = (vehicle, params, _stack(tracks), model,
-                jnp.asarray([s.speed for s in sections]),
-                jnp.asarray([s.misalignment for s in sections]),
-                jnp.asarray([wear_start(route, s) for s in sections]), law,
-                jnp.asarray(wheel_nodes), jnp.asarray(rail_nodes))
-        static = {"duration": route.duration, "options": options}
-        compiled, seconds = compile_program(_batch, *args, **static)
+        shared = (vehicle, params, model, law, jnp.asarray(wheel_nodes),
+                  jnp.asarray(rail_nodes))
+        rows = jax.tree.map(lambda x: split_rows(np.asarray(x), devices, AXIS), (
+            _stack(tracks), np.array([s.speed for s in padded]),
+            np.array([s.misalignment for s in padded]),
+            np.array([wear_start(route, s) for s in padded])))
+        static = {"duration": route.duration, "options": options, "devices": devices}
+        compiled, seconds = compile_program(_batch, shared, rows, **static)
         compile_s += seconds
         start = time.perf_counter()
-        wear, done = jax.block_until_ready(compiled(*args, **static))
+        wear, done = jax.block_until_ready(compiled(shared, rows, **static))
         run_s += time.perf_counter() - start
         host = jax.tree.map(np.asarray, wear)
         for i, k in enumerate(members):
