@@ -41,6 +41,7 @@ from ..compilation import compile_program
 from .distribution import lateral_grid
 from .route import Route, section_scenario, track_length, wear_start
 from .run_wear import run_wear
+from .wear_file import PENDING_FIELDS
 
 GRID_SPACING = 0.5e-3  # [m] of the wheel and rail grids
 AXIS = "sections"  # the mesh axis the sections are split along
@@ -248,38 +249,67 @@ def _append(evolution, name, value):
     evolution[name] = np.concatenate([evolution[name], np.asarray(value)[None]])
 
 
-def _run_step(route, wheel, heights, contact, built, length, nodes, max_depth, first, say):
+PART_FIELDS = tuple(PENDING_FIELDS)
+"""A sub-step's record (kept in the file while its step is not complete)."""
+
+
+def _part(wear: RouteWear, length: float) -> dict:
+    return {"length_km": np.asarray(length), "volume_per_km": wear.volume_per_km,
+            "flange_per_km": wear.volume_per_km * wear.flange_fraction,
+            "depth_per_km": wear.wheel_depth_per_km,
+            "rail_depth_per_pass": wear.rail_depth_per_pass}
+
+
+def _update_per_km(nodes, depth_per_km):
+    """The height the profile update takes off per km [m/km]: the wheels' mean (W, 2, K)
+    -> (K,), smoothed."""
+    return smooth(nodes, np.mean(depth_per_km, axis=(0, 1)))
+
+
+def _run_step(route, wheel, heights, contact, built, length, nodes, max_depth, first, say,
+              done_parts=None, save=None):
     """One step of ``length`` [km]: the route run with ``wheel`` (its profile ``heights``
-    [m] at ``nodes``), in sub-steps that take
-    at most ``max_depth`` [m] off the profile (None: one), the profile worn between
-    them. Returns the step's record: per-km quantities weighted by the sub-steps'
-    lengths (the flange fraction by their volumes), the height loss [m] it took off, the
-    sub-steps' count and their :class:`RouteWear`."""
-    remaining, parts, lengths, loss = length, [], [], np.zeros(len(nodes))
+    [m] at ``nodes``), in sub-steps that take at most ``max_depth`` [m] off the profile
+    (None: one), the profile worn between them. ``done_parts``: the records of sub-steps
+    already run (:data:`PART_FIELDS`, stacked), from a file; ``save(parts)`` is called
+    with the records after each sub-step that leaves some of the step. Returns the
+    step's record: per-km quantities weighted by the sub-steps' lengths (the flange
+    fraction by their volumes), the height loss [m] it took off, the sub-steps' count
+    and this call's :class:`RouteWear` of each sub-step."""
+    parts = [] if done_parts is None else [
+        {name: done_parts[name][i] for name in PART_FIELDS}
+        for i in range(len(done_parts["length_km"]))]
+    loss = sum((_update_per_km(nodes, p["depth_per_km"]) * float(p["length_km"])
+                for p in parts), np.zeros(len(nodes)))
+    remaining = length - sum(float(p["length_km"]) for p in parts)
+    if parts:
+        wheel = measured_wheel(nodes, heights - loss, wheel.nominal_radius)
+    runs = []
     while remaining > 1e-9 * length:
         wear = route_wear(route, wheel, contact, built=built,
                           cache_table=(first and not parts))
-        depth = smooth(nodes, np.mean(wear.wheel_depth_per_km, axis=(0, 1)))  # [m/km]
+        depth = _update_per_km(nodes, wear.wheel_depth_per_km)  # [m/km]
         peak = float(np.max(depth))
         part = remaining if (max_depth is None or peak <= 0.0) else min(remaining,
                                                                         max_depth / peak)
-        parts.append(wear)
-        lengths.append(part)
+        runs.append(wear)
+        parts.append(_part(wear, part))
         loss = loss + depth * part
         remaining -= part
         if remaining > 1e-9 * length:
             if say is not None:
                 say(f"  sub-step {len(parts)}: {part:.4g} km (at most {1e3 * max_depth:g} mm "
                     f"off the profile), {remaining:.4g} km left in the step")
+            if save is not None:
+                save({name: np.stack([p[name] for p in parts]) for name in PART_FIELDS})
             wheel = measured_wheel(nodes, heights - loss, wheel.nominal_radius)
-    stack = lambda field: np.stack([getattr(p, field) for p in parts])  # noqa: E731
+    stack = lambda field: np.stack([p[field] for p in parts])  # noqa: E731
     volume, fraction, depth, rail = _mix(
-        np.asarray(lengths) / length, stack("volume_per_km"),
-        stack("volume_per_km") * stack("flange_fraction"), stack("wheel_depth_per_km"),
-        stack("rail_depth_per_pass"))
+        stack("length_km") / length, stack("volume_per_km"), stack("flange_per_km"),
+        stack("depth_per_km"), stack("rail_depth_per_pass"))
     return {"volume_per_km": volume, "flange_fraction": fraction, "depth_per_km": depth,
             "height_loss": loss, "depth_per_pass": rail, "substeps": len(parts),
-            "route_wear": parts}
+            "route_wear": runs}
 
 
 def evolve(route: Route, distance_km: float, step_km: float, contact: str = "table",
@@ -334,13 +364,16 @@ def evolve(route: Route, distance_km: float, step_km: float, contact: str = "tab
         evolution["measures"] = {k: np.array([v]) for k, v in
                                  profile_measures(wheel, track.rails).items()}
     done = len(evolution["wear/height_loss"])
+    pending = evolution.pop("pending", None)
     heights = evolution["profile_height"][-1]
     if done:
         wheel = measured_wheel(nodes, heights, wheel.nominal_radius,
                                name=f"{route.name} {evolution['distance_km'][-1]:g} km")
-        if say is not None:
-            say(f"resuming from step {done} of {len(steps)} "
-                f"({evolution['distance_km'][-1]:g} km) in {out}")
+    if (done or pending is not None) and say is not None:
+        say(f"resuming after step {done} of {len(steps)} "
+            f"({evolution['distance_km'][-1]:g} km) in {out}"
+            + ("" if pending is None else
+               f", with {len(pending['length_km'])} sub-steps of step {done + 1} run"))
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -350,8 +383,12 @@ def evolve(route: Route, distance_km: float, step_km: float, contact: str = "tab
     for k in range(done, len(steps)):
         if say is not None and contact == "table" and k > 0:
             say(f"step {k + 1}: building the worn profile's contact table (in memory)")
+        save = None if out is None else (
+            lambda parts, k=k: write_evolution(out, {**evolution, "pending": parts},
+                                               {**attrs, "completed_steps": k}))
         step = _run_step(route, wheel, heights, contact, built, steps[k], nodes, max_depth,
-                         first=(k == 0), say=say)
+                         first=(k == 0), say=say,
+                         done_parts=pending if k == done else None, save=save)
         kept.extend(step["route_wear"])
         heights = heights - step["height_loss"]
         distance = evolution["distance_km"][-1] + steps[k]

@@ -9,8 +9,11 @@ coordinate; ``profile/height`` (N+1, Kw) [m] the wheel profile at each distance;
 ``wear/height_loss`` (N, Kw) [m] the smoothed loss each step took off the profile;
 ``rail/y`` (Kr,) [m]; ``rail/depth_per_pass`` (N, 2, Kr) [m]; ``substeps`` (N,) the
 route runs of each step; ``measures/<name>``
-(N+1,) [m, or 1 for the conicity]. Root attributes: the route, its source text, the
-options of the run (``key``), the completed steps and the format version.
+(N+1,) [m, or 1 for the conicity]; while a step split by ``--max-depth`` is under way,
+``pending/<name>`` the records of its sub-steps run so far (:data:`PENDING_FIELDS`),
+written after each of them, so that a resumed evolution goes on from the last. Root
+attributes: the route, its source text, the options of the run (``key``), the
+completed steps and the format version.
 """
 
 import json
@@ -36,6 +39,16 @@ STEP_FIELDS = {
     "rail/depth_per_pass": ("m", "the rails' height loss per pass of the vehicle (left, right)",
                             "step, rail, rail/y"),
     "substeps": ("1", "the route runs of the step (sub-steps of --max-depth)", "step"),
+}
+
+PENDING_FIELDS = {  # the sub-steps run of a step not yet complete (jaxrail.wear.evolution)
+    "length_km": ("km", "distance of each sub-step run", "substep"),
+    "volume_per_km": ("mm^3/km", "wear volume per km of each wheel", "substep, wheelset, wheel"),
+    "flange_per_km": ("mm^3/km", "the part of it on the flange", "substep, wheelset, wheel"),
+    "depth_per_km": ("m/km", "each wheel's height loss per km on the profile grid",
+                     "substep, wheelset, wheel, profile/y"),
+    "rail_depth_per_pass": ("m", "the rails' height loss per pass of the vehicle",
+                            "substep, rail, rail/y"),
 }
 
 
@@ -67,6 +80,10 @@ def write_evolution(path, evolution: dict, attrs: dict) -> None:
             for name, (units, description) in MEASURES.items():
                 dataset(f, f"measures/{name}", evolution["measures"][name], units,
                         description, "profile")
+            for name, (units, description, axes) in PENDING_FIELDS.items():
+                if evolution.get("pending") is not None:
+                    dataset(f, f"pending/{name}", evolution["pending"][name], units,
+                            description, axes)
 
     write_atomically(path, write)
 
@@ -87,6 +104,8 @@ def read_evolution(path) -> tuple[dict, dict]:
                      "measures": {name: f[f"measures/{name}"][()] for name in MEASURES}}
         for name in STEP_FIELDS:
             evolution[name] = f[name][()]
+        if "pending" in f:
+            evolution["pending"] = {name: f[f"pending/{name}"][()] for name in PENDING_FIELDS}
     return evolution, attrs
 
 

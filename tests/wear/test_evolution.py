@@ -102,3 +102,33 @@ def test_max_depth_splits_a_step(tmp_path, monkeypatch):
     hollow = HOLLOW_PER_KM * np.exp(-0.5 * (nodes / HOLLOW_WIDTH) ** 2)
     np.testing.assert_allclose(evolution["wear/height_loss"][0], 1000.0 * smooth(nodes, hollow),
                                rtol=1e-12, atol=1e-15)
+
+
+def test_an_evolution_stopped_inside_a_step_goes_on_from_its_last_sub_step(tmp_path,
+                                                                          monkeypatch):
+    """--max-depth splits the step into 3 runs; stopped in the third, the file keeps the
+    first two, and the resumed evolution runs only the third and ends where an evolution
+    that was never stopped ends."""
+    route = load_route("straight-route")
+    calls = []
+    monkeypatch.setattr(evolution_module, "route_wear", _fake_route_wear(calls))
+    whole = evolve(route, 1000.0, 1000.0, contact="online", max_depth=0.15e-3)
+    assert len(calls) == 3
+    out = tmp_path / "wear.h5"
+    calls.clear()
+    monkeypatch.setattr(evolution_module, "route_wear", _fake_route_wear(calls, fail_at=3))
+    with pytest.raises(Interrupted):
+        evolve(route, 1000.0, 1000.0, contact="online", out=out, max_depth=0.15e-3)
+    saved, attrs = read_evolution(out)
+    assert attrs["completed_steps"] == 0 and len(saved["pending"]["length_km"]) == 2
+    calls.clear()
+    monkeypatch.setattr(evolution_module, "route_wear", _fake_route_wear(calls))
+    evolve(route, 1000.0, 1000.0, contact="online", out=out, max_depth=0.15e-3)
+    assert len(calls) == 1  # only the third sub-step ran, on the profile the first two wore
+    assert calls[0] == "worn"
+    evolution, attrs = read_evolution(out)
+    assert "pending" not in evolution and list(evolution["substeps"]) == [3]
+    np.testing.assert_allclose(evolution["profile_height"][-1], whole["profile_height"][-1],
+                               rtol=0, atol=1e-15)
+    np.testing.assert_allclose(evolution["wear/volume_per_km"], whole["wear/volume_per_km"],
+                               rtol=1e-15)
