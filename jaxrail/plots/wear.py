@@ -48,6 +48,7 @@ def plot_measures(evolution, path, title=None):
     for ax in axes[1]:
         ax.set_xlabel("distance [km]")
     fig.suptitle(title or "profile measures against distance")
+    fig.tight_layout()  # the right column's labels clear the left column's ticks
     save_figure(fig, path)
 
 
