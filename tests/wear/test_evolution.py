@@ -132,3 +132,17 @@ def test_an_evolution_stopped_inside_a_step_goes_on_from_its_last_sub_step(tmp_p
                                rtol=0, atol=1e-15)
     np.testing.assert_allclose(evolution["wear/volume_per_km"], whole["wear/volume_per_km"],
                                rtol=1e-15)
+
+
+def test_the_figures_of_an_evolution_are_written(tmp_path, monkeypatch):
+    """The three figures of `jaxrail wear --plots` from an evolution of two steps: PNG
+    files, each whole (the figure module writes them atomically)."""
+    from jaxrail.plots.wear import plot_measures, plot_wear_distribution, plot_worn_profiles
+
+    route = load_route("straight-route")
+    monkeypatch.setattr(evolution_module, "route_wear", _fake_route_wear([]))
+    evolution = evolve(route, 2000.0, 1000.0, contact="online")
+    for name, plot in (("profiles.png", plot_worn_profiles), ("measures.png", plot_measures),
+                       ("distribution.png", plot_wear_distribution)):
+        plot(evolution, tmp_path / name, title="test")
+        assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
