@@ -71,8 +71,8 @@ def add_parser(commands):
                       help="distance to run [km] (default 200000)")
     wear.add_argument("--step", type=float, default=20000.0,
                       help="distance per profile update [km] (default 20000)")
-    wear.add_argument("--out", help="HDF5 file of the evolution, written after every step; "
-                                    "an interrupted evolution resumes from it")
+    wear.add_argument("--out", help="HDF5 file of the evolution, written after every step "
+                                    "and sub-step; an interrupted evolution resumes from it")
     wear.add_argument("--max-depth", type=float, metavar="MM",
                       help="split each step so that no update takes more than MM off the "
                            "wheel profile (the route run again on the profile worn so far; "
