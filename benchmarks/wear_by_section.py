@@ -1,7 +1,7 @@
 """The wear of each section of a route on the new profile (docs/wear.md, "What limits
 the step"): every wheel's wear per km and its flange part, and the largest height the
 evolution's update would take off per km (the mean over the wheels, smoothed as
-:func:`jaxrail.wear.evolution.evolve` does), section by section, and the 200 000 km
+:func:`jaxrail.wear.evolution.update_per_km`), section by section, and the 200 000 km
 such a rate would add up to.
 
 ``python benchmarks/wear_by_section.py [ROUTE] [--law usfd] [--contact table]``
@@ -22,7 +22,7 @@ jax.config.update("jax_enable_x64", True)
 
 import numpy as np  # noqa: E402
 
-from jaxrail.wear.evolution import route_wear, smooth  # noqa: E402
+from jaxrail.wear.evolution import route_wear, update_per_km  # noqa: E402
 from jaxrail.wear.laws import MODELS  # noqa: E402
 from jaxrail.wear.route import load_route  # noqa: E402
 
@@ -49,7 +49,7 @@ def main():
     wall = time.perf_counter() - start
     sections = []
     for k, section in enumerate(route.sections):
-        update = smooth(wear.wheel_nodes, wear.sections_depth_per_km[k].mean(axis=(0, 1)))
+        update = update_per_km(wear.wheel_nodes, wear.sections_depth_per_km[k])
         peak = int(np.argmax(update))
         sections.append({
             "section": section_label(section),

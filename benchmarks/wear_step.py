@@ -29,7 +29,8 @@ from jaxrail.wear.run_wear import run_wear  # noqa: E402
 
 from jaxrail.vehicles import contact_model  # noqa: E402
 from jaxrail.wear.evolution import (GRID_SPACING, measured_wheel,  # noqa: E402
-                                    profile_measures, route_wear, smooth)
+                                    profile_heights, profile_measures, route_wear,
+                                    update_per_km)
 from jaxrail.wear.distribution import lateral_grid  # noqa: E402
 from jaxrail.wear.route import parse_route  # noqa: E402
 
@@ -104,9 +105,9 @@ def main():
     base = route.base()
     vehicle, params, track = base.build()
     nodes = lateral_grid(params.wheel.surfaces[0].domain, GRID_SPACING)
-    loss = smooth(nodes, np.mean(wear.wheel_depth_per_km, axis=(0, 1))) * 1000.0
-    new = np.asarray(jax.vmap(params.wheel.surfaces[0].height)(jnp.asarray(nodes)))
-    wheel = measured_wheel(nodes, new - loss, params.wheel.nominal_radius)
+    loss = update_per_km(nodes, wear.wheel_depth_per_km) * 1000.0
+    wheel = measured_wheel(nodes, profile_heights(params.wheel, nodes) - loss,
+                           params.wheel.nominal_radius)
     start = time.perf_counter()
     measures = profile_measures(wheel, track.rails)
     measures_s = time.perf_counter() - start

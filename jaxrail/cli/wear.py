@@ -65,8 +65,8 @@ def add_parser(commands):
     wear = commands.add_parser(
         "wear", help="wear: a route's wheel and rail wear and the profile it wears into "
                      "over a distance")
-    wear.add_argument("route", help="a built-in route (straight-route, curved-route, main-line-route) or a "
-                                    "route .toml file")
+    wear.add_argument("route", help="a built-in route (straight-route, curved-route, "
+                                    "main-line-route) or a route .toml file")
     wear.add_argument("--distance", type=float, default=200000.0,
                       help="distance to run [km] (default 200000)")
     wear.add_argument("--step", type=float, default=20000.0,

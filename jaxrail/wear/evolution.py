@@ -80,7 +80,8 @@ class RouteWear:
 
 
 def _stack(trees):
-    return jax.tree.map(lambda *xs: jnp.stack(xs), *trees)
+    """The trees' leaves stacked on the host (they go to the devices split by section)."""
+    return jax.tree.map(lambda *xs: np.stack([np.asarray(x) for x in xs]), *trees)
 
 
 def _sections(vehicle, params, contact, law, wheel_nodes, rail_nodes, tracks, speeds,
@@ -139,7 +140,7 @@ def route_wear(route: Route, wheel=None, contact=None, progress=False, built=Non
             model = contact_model(mode, vehicle, params, tracks[0], progress, cache_table)
         shared = (vehicle, params, model, law, jnp.asarray(wheel_nodes),
                   jnp.asarray(rail_nodes))
-        rows = jax.tree.map(lambda x: split_rows(np.asarray(x), devices, AXIS), (
+        rows = jax.tree.map(lambda x: split_rows(x, devices, AXIS), (
             _stack(tracks), np.array([s.speed for s in padded]),
             np.array([s.misalignment for s in padded]),
             np.array([wear_start(route, s) for s in padded])))
@@ -194,6 +195,11 @@ def smooth(nodes, values, sigma=SMOOTHING):
     kernel = np.exp(-0.5 * d * d)
     kernel /= kernel.sum(axis=0, keepdims=True)  # each source spreads exactly its value
     return kernel @ np.asarray(values)
+
+
+def profile_heights(wheel: WheelProfile, nodes) -> np.ndarray:
+    """The heights [m] of ``wheel``'s (one-surface) profile at ``nodes`` [m]."""
+    return np.asarray(jax.vmap(wheel.surfaces[0].height)(jnp.asarray(nodes)))
 
 
 def measured_wheel(nodes, heights, nominal_radius, name="worn") -> WheelProfile:
@@ -260,7 +266,7 @@ def _part(wear: RouteWear, length: float) -> dict:
             "rail_depth_per_pass": wear.rail_depth_per_pass}
 
 
-def _update_per_km(nodes, depth_per_km):
+def update_per_km(nodes, depth_per_km):
     """The height the profile update takes off per km [m/km]: the wheels' mean (W, 2, K)
     -> (K,), smoothed."""
     return smooth(nodes, np.mean(depth_per_km, axis=(0, 1)))
@@ -279,7 +285,7 @@ def _run_step(route, wheel, heights, contact, built, length, nodes, max_depth, f
     parts = [] if done_parts is None else [
         {name: done_parts[name][i] for name in PART_FIELDS}
         for i in range(len(done_parts["length_km"]))]
-    loss = sum((_update_per_km(nodes, p["depth_per_km"]) * float(p["length_km"])
+    loss = sum((update_per_km(nodes, p["depth_per_km"]) * float(p["length_km"])
                 for p in parts), np.zeros(len(nodes)))
     remaining = length - sum(float(p["length_km"]) for p in parts)
     if parts:
@@ -288,7 +294,7 @@ def _run_step(route, wheel, heights, contact, built, length, nodes, max_depth, f
     while remaining > 1e-9 * length:
         wear = route_wear(route, wheel, contact, built=built,
                           cache_table=(first and not parts))
-        depth = _update_per_km(nodes, wear.wheel_depth_per_km)  # [m/km]
+        depth = update_per_km(nodes, wear.wheel_depth_per_km)  # [m/km]
         peak = float(np.max(depth))
         part = remaining if (max_depth is None or peak <= 0.0) else min(remaining,
                                                                         max_depth / peak)
@@ -359,8 +365,7 @@ def evolve(route: Route, distance_km: float, step_km: float, contact: str = "tab
             evolution = saved
     if evolution is None:
         evolution = _empty(nodes, rail_nodes, vehicle.n_wheelsets)
-        heights = np.asarray(jax.vmap(wheel.surfaces[0].height)(jnp.asarray(nodes)))
-        evolution["profile_height"] = heights[None]
+        evolution["profile_height"] = profile_heights(wheel, nodes)[None]
         evolution["measures"] = {k: np.array([v]) for k, v in
                                  profile_measures(wheel, track.rails).items()}
     done = len(evolution["wear/height_loss"])
