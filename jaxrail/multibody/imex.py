@@ -37,7 +37,10 @@ J = [[0, I], [A_q, A_v]] with y = (q, qdot): the accelerations' dependence on th
 positions and velocities of the bodies whose loads are stiff, through those loads
 only (the term's ``linearised``, e.g. :meth:`jaxrail.vehicles.VehicleLoads.linearised`).
 A_q, A_v have 7 columns per such body, so the step inverts a (7 k, 7 k) matrix
-(28 x 28 for four wheelsets) instead of the whole state's. Loads with no stiff bodies
+(28 x 28 for four wheelsets) instead of the whole state's. In a system without joints
+each body's accelerations respond to its own loads only, so that matrix is
+block-diagonal and the step inverts k (7, 7) blocks instead, in plain operations
+(:mod:`.block_inverse`: no LAPACK call in the integration loop). Loads with no stiff bodies
 (:class:`~jaxrail.multibody.loads.AbstractLoads`' default ``linearised``, e.g.
 :class:`~jaxrail.multibody.loads.SystemLoads`) give J = 0, and the method is the
 explicit KenCarp tableau.
@@ -52,6 +55,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._when import computed_when, zeros_of
+from .block_inverse import block_inverses
 from .equations import acceleration_response, accelerations, element_rates
 from .loads import AbstractLoads, FixedLoads
 from .projection import project_state
@@ -68,12 +72,15 @@ class StiffJacobian(eqx.Module):
     Fields: columns (c,) static indices into q; a_q, a_v (7 n, c): accelerations per
     unit change of those coordinates [1/s^2] and velocities [1/s]; bodies (static): the
     number k of stiff bodies, whose columns come body by body, each body's 7
-    coordinates first (its Euler parameters at 3 to 6)."""
+    coordinates first (its Euler parameters at 3 to 6); block_diagonal (static): whether
+    each stiff body's rows of A_q, A_v are zero in the other stiff bodies' columns (a
+    system without joints), so that I - hg J inverts block by block."""
 
     columns: tuple[int, ...] = eqx.field(static=True)
     a_q: jax.Array
     a_v: jax.Array
     bodies: int = eqx.field(static=True, default=0)
+    block_diagonal: bool = eqx.field(static=True, default=False)
 
     def euler_index(self):
         """(k, 4) indices into q of the stiff bodies' Euler parameters."""
@@ -93,11 +100,16 @@ class StiffJacobian(eqx.Module):
     def factor(self, hg):
         """The pieces of (I - hg J)^-1: with B = hg A_v + hg^2 A_q (columns c only),
         x_v = r + B x_c and (I - B_cc) x_c = r_c, r = b_v + hg A_q b_q[c]; returns B
-        and the inverse (I - B_cc)^-1. One inversion per step, so that each stage's
+        and the inverse (I - B_cc)^-1, or with ``block_diagonal`` the inverses of its k
+        diagonal blocks (k, c / k, c / k). One inversion per step, so that each stage's
         solve is a product (a factorisation would take two LAPACK triangular solves per
         stage inside the integration loop)."""
         index = np.asarray(self.columns, dtype=int)
         b = hg * self.a_v + hg * hg * self.a_q
+        if self.block_diagonal:
+            k, size = self.bodies, index.size // self.bodies
+            blocks = b.reshape(-1, k, size)[index.reshape(k, size), np.arange(k)[:, None], :]
+            return b, block_inverses(jnp.eye(size, dtype=b.dtype) - blocks)
         inverse = jnp.linalg.inv(jnp.eye(index.size, dtype=b.dtype) - b[index])
         return b, inverse
 
@@ -133,7 +145,8 @@ class StiffJacobian(eqx.Module):
             rows = a[index.ravel()].reshape(k, 4, -1)
             change = jnp.einsum("kfe,kec->kfc", right, rows) - rows
             return a + jnp.asarray(select) @ change.reshape(4 * k, -1)
-        return StiffJacobian(self.columns, carried(self.a_q), carried(self.a_v), k)
+        return StiffJacobian(self.columns, carried(self.a_q), carried(self.a_v), k,
+                             self.block_diagonal)
 
     def solve(self, hg, factored, rhs_):
         """x = (I - hg J)^-1 rhs_ for rhs_ = (b_q, b_v, b_z), with ``factored`` from
@@ -142,7 +155,11 @@ class StiffJacobian(eqx.Module):
         b, inverse = factored
         index = np.asarray(self.columns, dtype=int)
         r = b_v + hg * (self.a_q @ b_q[index])
-        x_c = inverse @ r[index]
+        if self.block_diagonal:
+            x_c = jnp.einsum("kij,kj->ki", inverse,
+                             r[index].reshape(self.bodies, -1)).reshape(-1)
+        else:
+            x_c = inverse @ r[index]
         x_v = r + b @ x_c
         return b_q + hg * x_v, x_v, b_z
 
@@ -200,7 +217,7 @@ def stiff_jacobian(t, y: State, loads: AbstractLoads, jacobian=True):
     a_q = response[:, :, :half].reshape(n7 + k * r, -1)
     a_v = response[:, :, half:].reshape(n7 + k * r, -1)
     f = _pack(State(qdot, qddot, f_track, f_elements))
-    return f, StiffJacobian(columns, a_q, a_v, k)
+    return f, StiffJacobian(columns, a_q, a_v, k, system.jointless and k > 0)
 
 
 def _euler(jac, positions):

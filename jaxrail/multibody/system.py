@@ -53,6 +53,12 @@ class System(eqx.Module):
         rows = sum(jt.JOINT_KINDS[g.kind][0] * len(g.body_i) for g in self.joint_groups)
         return self.n_bodies + rows
 
+    @property
+    def jointless(self) -> bool:
+        """Whether the system has no joints: its constraints are the bodies'
+        normalisations, each on its own body's coordinates."""
+        return not self.joint_groups
+
     def find(self, name: str) -> tuple[str, str, int]:
         """("body", "", i) or ("joint" | "force", kind, index within its kind)."""
         if name in self.body_names:

@@ -133,6 +133,11 @@ def test_minimum_norm_correction_equals_the_pseudo_inverse():
     expected = np.einsum("bij,bj->bi", np.linalg.pinv(phi_q), rhs)
     assert np.allclose(_minimum_norm_solution(phi_q[0], rhs[0]), expected[0], atol=1e-12)
     assert np.allclose(jax.vmap(_minimum_norm_solution)(phi_q, rhs), expected, atol=1e-12)
+    # rows on disjoint columns (a system without joints): the diagonal solve
+    disjoint = phi_q * (np.arange(9)[None, None, :] // 2 == np.arange(5)[None, :, None])
+    expected = np.einsum("bij,bj->bi", np.linalg.pinv(disjoint), rhs)
+    solved = jax.vmap(lambda p, r: _minimum_norm_solution(p, r, True))(disjoint, rhs)
+    assert np.allclose(solved, expected, atol=1e-12)
 
 
 def test_double_pendulum_constraint_violation_over_10_s(swinging):
