@@ -18,12 +18,17 @@ its own:
   ``benchmarks/_plain_linalg.py``; YNNPACK fusions off, a per-program option; no
   progress report), default flags;
 - ``hoisted``: ``hoistable`` with the threshold raised: the integration loop is one
-  kernel.
+  kernel;
+- ``inner``: ``ynn-off`` with the threshold raised, nothing else changed: for a vehicle
+  without joints the engine's IMEX loop holds no LAPACK call, so XLA may hoist the
+  loops inside the step loop (the stages') while the progress report keeps the step
+  loop itself apart.
 
 Prints JSON: per variant the compile time, the run times of ``--runs`` calls of the
 compiled run (after the first, which compiles), steps, µs per step (median and
 fastest), whether the integration loop became one kernel (in the largest optimised
-program, :func:`_loop_in_one_kernel`), the largest difference of the wheelsets' lateral
+program, :func:`_loop_in_one_kernel`), how many loops XLA made kernels of and how many
+custom calls are left in it (:func:`_kernels_and_calls`), the largest difference of the wheelsets' lateral
 displacements from ``today``'s over all output times [mm], the ratios to ``today`` and
 the load.
 The "hoistable" variants' rest pose solves with the plain operations too (they replace
@@ -42,7 +47,7 @@ from pathlib import Path
 
 from _variants import run_variant  # benchmarks/_variants.py, beside this script
 
-VARIANTS = ("today", "ynn-off", "threshold", "hoistable", "hoisted")
+VARIANTS = ("today", "ynn-off", "threshold", "hoistable", "hoisted", "inner")
 THRESHOLD = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=10000000000"
 
 
@@ -58,8 +63,15 @@ def _loop_in_one_kernel(text):
     return " while(" not in entry and "xla_cpu_small_call" in entry
 
 
+def _kernels_and_calls(text):
+    """(loops XLA compiled into one kernel, other custom calls: LAPACK, FFI, YNNPACK's
+    fusions) in an optimised program's text."""
+    return text.count('xla_cpu_small_call="true"'), (text.count(" custom-call(")
+                                                      + text.count("kind=kCustom"))
+
+
 def child(variant, duration, runs):
-    if variant in ("threshold", "hoisted"):
+    if variant in ("threshold", "hoisted", "inner"):
         os.environ["XLA_FLAGS"] = _with_threshold()
     os.environ["JAXRAIL_COMPILATION_CACHE"] = "off"
     import jax
@@ -88,7 +100,7 @@ def child(variant, duration, runs):
         jax.scipy.linalg.cho_factor, jax.scipy.linalg.cho_solve = plain.cho_factor, plain.cho_solve
         jnp.linalg.inv, jnp.linalg.solve = plain.inv, plain.solve
         jaxrail._time_report.report_time = lambda t: None
-    if variant in ("ynn-off", "hoistable", "hoisted"):
+    if variant in ("ynn-off", "hoistable", "hoisted", "inner"):
         jaxrail.compilation.compiler._CPU_OPTIONS["xla_cpu_experimental_ynn_fusion_type"] = ""
     scenario = load_scenario("paper-curve")
     first, *_ = run_scenario(scenario, duration, contact="table")
@@ -105,6 +117,7 @@ def child(variant, duration, runs):
         "us_per_step": round(1e6 * float(np.median(walls)) / steps, 1),
         "us_per_step_min": round(1e6 * min(walls) / steps, 1),
         "loop_in_one_kernel": _loop_in_one_kernel(integration),
+        "loops_hoisted_and_custom_calls": _kernels_and_calls(integration),
         "lateral": np.asarray(second.wheelset_lateral).tolist()}))
 
 
