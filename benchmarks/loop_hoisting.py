@@ -34,7 +34,7 @@ the load.
 The "hoistable" variants' rest pose solves with the plain operations too (they replace
 ``jnp.linalg.solve`` everywhere); it runs once per run, outside the loop.
 
-    python benchmarks/loop_hoisting.py [--duration 1] [--runs 5] [--variants today hoisted]
+    python benchmarks/loop_hoisting.py [--duration 1] [--runs 5] [--contact table|online] [--variants today inner]
     python benchmarks/loop_hoisting.py --toy   (the stage matrix's inverse in a small loop)
 """
 
@@ -46,9 +46,10 @@ import sys
 from pathlib import Path
 
 from _variants import run_variant  # benchmarks/_variants.py, beside this script
+from jaxrail.compilation.loop_kernels import THRESHOLD_FLAG
 
 VARIANTS = ("today", "ynn-off", "threshold", "hoistable", "hoisted", "inner")
-THRESHOLD = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=10000000000"
+THRESHOLD = THRESHOLD_FLAG
 
 
 def _with_threshold():
@@ -70,7 +71,7 @@ def _kernels_and_calls(text):
                                                       + text.count("kind=kCustom"))
 
 
-def child(variant, duration, runs):
+def child(variant, duration, runs, contact):
     if variant in ("threshold", "hoisted", "inner"):
         os.environ["XLA_FLAGS"] = _with_threshold()
     os.environ["JAXRAIL_COMPILATION_CACHE"] = "off"
@@ -103,10 +104,10 @@ def child(variant, duration, runs):
     if variant in ("ynn-off", "hoistable", "hoisted", "inner"):
         jaxrail.compilation.compiler._CPU_OPTIONS["xla_cpu_experimental_ynn_fusion_type"] = ""
     scenario = load_scenario("paper-curve")
-    first, *_ = run_scenario(scenario, duration, contact="table")
+    first, *_ = run_scenario(scenario, duration, contact=contact)
     walls = []
     for _ in range(runs):
-        second, *_ = run_scenario(scenario, duration, contact="table")
+        second, *_ = run_scenario(scenario, duration, contact=contact)
         walls.append(float(second.wall_time_s))
     integration = max((p.as_text() or "" for p in programs), key=len)
     steps = int(second.accepted_steps) + int(second.rejected_steps)
@@ -167,6 +168,7 @@ def main():
     parser.add_argument("--duration", type=float, default=1.0)
     parser.add_argument("--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS))
     parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--contact", choices=("table", "online"), default="table")
     parser.add_argument("--child", choices=VARIANTS)
     parser.add_argument("--toy", action="store_true", help="the inverse in a small loop only")
     parser.add_argument("--toy-child", action="store_true")
@@ -178,12 +180,12 @@ def main():
     if args.toy:
         return toy(args.runs)
     if args.child:
-        return child(args.child, args.duration, args.runs)
+        return child(args.child, args.duration, args.runs, args.contact)
     import numpy as np
     rows = []
     for variant in args.variants:
         command = [sys.executable, __file__, "--child", variant, "--duration",
-                   str(args.duration), "--runs", str(args.runs)]
+                   str(args.duration), "--runs", str(args.runs), "--contact", args.contact]
         rows.append(run_variant(command, variant))
     laterals = {r["variant"]: np.asarray(r.pop("lateral")) for r in rows if "lateral" in r}
     base = next((r for r in rows if r["variant"] == "today" and "error" not in r), None)
@@ -194,7 +196,7 @@ def main():
             r["step_time_vs_today"] = round(r["us_per_step"] / base["us_per_step"], 3)
             r["step_time_min_vs_today"] = round(r["us_per_step_min"] / base["us_per_step_min"], 3)
             r["compile_vs_today"] = round(r["compile_s"] / base["compile_s"], 3)
-    print(json.dumps({"scenario": "paper-curve", "contact": "table", "integrator": "IMEX",
+    print(json.dumps({"scenario": "paper-curve", "contact": args.contact, "integrator": "IMEX",
                       "duration_s": args.duration, "variants": rows,
                       "load_1min_after": round(os.getloadavg()[0], 2)}, indent=1))
 

@@ -29,6 +29,7 @@ _LAZY = {
     "read_measurements": "identification",
     "run_montecarlo": "montecarlo", "run_samples": "montecarlo",
     "summarize": "results", "write_results": "results", "read_results": "results",
+    "use_loop_kernels": "compilation.loop_kernels",
 }
 __all__ = ["__version__", "enable_float64", "require_float64", "use_host_devices",
            *_LAZY]

@@ -11,6 +11,10 @@ import os
 # command line keep XLA's default.
 os.environ.setdefault("XLA_FLAGS", "--xla_backend_optimization_level=0 "
                                    "--xla_llvm_disable_expensive_passes=true")
+# The jaxrail command compiles IMEX's stage loops as single kernels
+# (jaxrail.compilation.loop_kernels), which takes about 1.7 times as long to compile;
+# the suite's commands, in this process or in the processes it starts, do not.
+os.environ.setdefault("JAXRAIL_LOOP_KERNELS", "off")
 
 import jax  # noqa: E402
 import pytest  # noqa: E402

@@ -9,6 +9,9 @@ from ._options import (contact_option, duration, duration_option, emit_json, jso
 
 
 def simulate_command(args):
+    from ..compilation.loop_kernels import use_loop_kernels
+
+    use_loop_kernels(required=False)  # before anything starts JAX: stage loops as kernels
     from .. import __version__
     from ..results import summarize, write_results
     from ..scenarios import load_scenario, prepare_scenario, run_scenario

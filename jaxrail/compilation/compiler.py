@@ -39,6 +39,7 @@ import jax
 
 from .._files import cache_root
 from .._time_report import register as register_time_report
+from .loop_kernels import NO_YNNPACK, loop_kernels_on
 from .programs import compile_through_program_cache
 
 _CPU_OPTIONS = {
@@ -49,8 +50,11 @@ _CPU_OPTIONS = {
 
 def compiler_options() -> dict:
     """The options for a program compiled for JAX's default backend: the CPU ones
-    above, none elsewhere."""
-    return dict(_CPU_OPTIONS) if jax.default_backend() == "cpu" else {}
+    above, and YNNPACK's fusions off while loops compile as kernels
+    (:mod:`.loop_kernels`); none elsewhere."""
+    if jax.default_backend() != "cpu":
+        return {}
+    return dict(_CPU_OPTIONS, **(NO_YNNPACK if loop_kernels_on() else {}))
 
 
 @contextlib.contextmanager
