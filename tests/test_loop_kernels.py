@@ -62,11 +62,12 @@ def test_left_alone_when_switched_off_or_the_user_passes_extra_options(environ):
     assert "xla_cpu_experimental_ynn_fusion_type" not in out["options"]
 
 
-def test_after_jax_has_started_it_refuses_or_declines():
+def test_after_jax_has_started_it_refuses_or_declines(monkeypatch):
     """In this test process JAX has started (the suite runs on it): ``required`` raises,
-    as the jaxrail command's call declines."""
+    as the jaxrail command's call declines (with the suite's switch turned on)."""
     import jax.numpy as jnp
 
+    monkeypatch.setenv(SWITCH, "on")
     from jaxrail.compilation.loop_kernels import use_loop_kernels
 
     jnp.zeros(1).block_until_ready()
