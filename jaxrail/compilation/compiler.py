@@ -32,12 +32,12 @@ and the status "failed".
 """
 
 import contextlib
-import os
 
 import equinox._errors
 import jax
 
 from .._files import cache_root
+from .._switches import switched_off
 from .._time_report import register as register_time_report
 from .loop_kernels import NO_YNNPACK, loop_kernels_on
 from .programs import compile_through_program_cache
@@ -71,7 +71,7 @@ def _checks_as_nan():
 def persistent_cache_folder():
     """The folder :func:`use_persistent_cache` puts compiled programs in, or None if the
     cache is turned off (module docstring)."""
-    if os.environ.get("JAXRAIL_COMPILATION_CACHE", "on").lower() in ("0", "off", "false", "no"):
+    if switched_off("JAXRAIL_COMPILATION_CACHE"):
         return None
     if not jax.config.jax_enable_compilation_cache:
         return None

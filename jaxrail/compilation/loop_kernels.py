@@ -20,6 +20,8 @@ YNNPACK's fusions off in jaxrail's programs.
 
 import os
 
+from .._switches import switched_off
+
 THRESHOLD_OPTION = "xla_cpu_small_while_loop_byte_threshold"
 THRESHOLD_FLAG = f"--xla_backend_extra_options={THRESHOLD_OPTION}=10000000000"
 SWITCH = "JAXRAIL_LOOP_KERNELS"  # "off" keeps the jaxrail command from setting the flag
@@ -46,8 +48,7 @@ def use_loop_kernels(required: bool = True) -> bool:
     if loop_kernels_on():
         return True
     flags = os.environ.get("XLA_FLAGS", "")
-    if (os.environ.get(SWITCH, "on").lower() in ("0", "off", "false", "no")
-            or "--xla_backend_extra_options" in flags):
+    if switched_off(SWITCH) or "--xla_backend_extra_options" in flags:
         return False
     if xla_bridge.backends_are_initialized():
         if not required:
