@@ -13,16 +13,16 @@ its own:
 
 - ``today``: jaxrail as it is, XLA's default flags;
 - ``ynn-off``: ``today`` without YNNPACK's fusions (a per-program option);
-- ``threshold``: ``today`` with the threshold raised (the loop still holds LAPACK);
 - ``hoistable``: the loop's blockers removed (the solves in plain operations,
   ``benchmarks/_plain_linalg.py``; YNNPACK fusions off, a per-program option; no
   progress report), default flags;
 - ``hoisted``: ``hoistable`` with the threshold raised: the integration loop is one
   kernel;
-- ``inner``: ``ynn-off`` with the threshold raised, nothing else changed: for a vehicle
-  without joints the engine's IMEX loop holds no LAPACK call, so XLA may hoist the
-  loops inside the step loop (the stages') while the progress report keeps the step
-  loop itself apart.
+- ``inner``: ``today`` with the threshold raised, nothing else changed (with it
+  jaxrail's programs leave YNNPACK's fusions out, :mod:`jaxrail.compilation.loop_kernels`,
+  as ``jaxrail simulate`` runs): for a vehicle without joints the engine's IMEX loop
+  holds no LAPACK call, so XLA may hoist the loops inside the step loop (the stages')
+  while the progress report keeps the step loop itself apart.
 
 Prints JSON: per variant the compile time, the run times of ``--runs`` calls of the
 compiled run (after the first, which compiles), steps, µs per step (median and
@@ -48,7 +48,7 @@ from pathlib import Path
 from _variants import run_variant  # benchmarks/_variants.py, beside this script
 from jaxrail.compilation.loop_kernels import THRESHOLD_FLAG
 
-VARIANTS = ("today", "ynn-off", "threshold", "hoistable", "hoisted", "inner")
+VARIANTS = ("today", "ynn-off", "hoistable", "hoisted", "inner")
 THRESHOLD = THRESHOLD_FLAG
 
 
@@ -72,7 +72,7 @@ def _kernels_and_calls(text):
 
 
 def child(variant, duration, runs, contact):
-    if variant in ("threshold", "hoisted", "inner"):
+    if variant in ("hoisted", "inner"):
         os.environ["XLA_FLAGS"] = _with_threshold()
     os.environ["JAXRAIL_COMPILATION_CACHE"] = "off"
     import jax
@@ -101,7 +101,7 @@ def child(variant, duration, runs, contact):
         jax.scipy.linalg.cho_factor, jax.scipy.linalg.cho_solve = plain.cho_factor, plain.cho_solve
         jnp.linalg.inv, jnp.linalg.solve = plain.inv, plain.solve
         jaxrail._time_report.report_time = lambda t: None
-    if variant in ("ynn-off", "hoistable", "hoisted", "inner"):
+    if variant in ("ynn-off", "hoistable", "hoisted"):
         jaxrail.compilation.compiler._CPU_OPTIONS["xla_cpu_experimental_ynn_fusion_type"] = ""
     scenario = load_scenario("paper-curve")
     first, *_ = run_scenario(scenario, duration, contact=contact)
