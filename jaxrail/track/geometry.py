@@ -21,9 +21,13 @@ Conventions (docs/design.md §3):
 
 Within a segment of local distance ``sigma = s - s_start`` the heading is quadratic,
 ``h = h0 + kappa0 sigma + rate sigma^2 / 2``; ``X, Y`` are the integrals of ``cos h``
-and ``sin h`` over ``[0, sigma]``, evaluated for every segment kind (straight, arc,
-clothoid) by one fixed-node Gauss-Legendre rule of 24 nodes. For railway segments
-(heading change per segment up to about 2 pi) its error is below 1e-12 m.
+and ``sin h``, evaluated for every segment kind (straight, arc, clothoid) by
+fixed-node Gauss-Legendre rules: from the segment's start with 24 nodes where the
+layout is built (the segment starts and the track's coarse samples, for heading
+changes per segment up to about 2 pi), and at a point ``s`` from the nearest coarse
+sample of its segment with 8 (:func:`centreline_position`: at most half a sample
+spacing, over which the heading turns by at most 2 pi / (2 x 8) with the least
+samples a layout takes). Both are within 1e-12 m of the exact integral.
 
 Beyond the ends (``s < 0`` or ``s > total length``) the first and last segments are
 **extended by their own law**: a straight end (the usual case) continues as a
@@ -47,7 +51,10 @@ if TYPE_CHECKING:
 # Gauss-Legendre nodes and weights on [-1, 1]; numpy constants, cast at use so that
 # importing this module does not depend on JAX's float64 switch.
 GAUSS_LEGENDRE_NODES = 24
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(GAUSS_LEGENDRE_NODES)
+# from the nearest coarse sample (module docstring); the layout takes at least
+# MIN_SAMPLES_PER_SEGMENT samples per segment for it
+FROM_SAMPLE_NODES = 8
+MIN_SAMPLES_PER_SEGMENT = 8
 
 
 def local_heading(heading0, curvature0, curvature_rate, sigma):
@@ -55,15 +62,17 @@ def local_heading(heading0, curvature0, curvature_rate, sigma):
     return heading0 + sigma * (curvature0 + 0.5 * curvature_rate * sigma)
 
 
-def local_offset(heading0, curvature0, curvature_rate, sigma):
+def local_offset(heading0, curvature0, curvature_rate, sigma, nodes=GAUSS_LEGENDRE_NODES):
     """Plane offset ``(dX, dY)`` [m] from a segment's start to local distance ``sigma``.
 
-    Gauss-Legendre quadrature of ``(cos h, sin h)`` over ``[0, sigma]``; valid for
-    negative ``sigma`` too (extension before the start). Shared by the layout builder
-    (segment start points) and by evaluation, so position is continuous at joints.
+    Gauss-Legendre quadrature of ``(cos h, sin h)`` over ``[0, sigma]`` with ``nodes``
+    nodes (static); valid for negative ``sigma`` too (extension before the start). The
+    layout builder places the segment starts and coarse samples with it, and
+    :func:`centreline_position` integrates from the nearest sample.
     """
-    x = jnp.asarray(_GL_X, dtype=jnp.float64)
-    w = jnp.asarray(_GL_W, dtype=jnp.float64)
+    nodes_x, weights = np.polynomial.legendre.leggauss(nodes)
+    x = jnp.asarray(nodes_x, dtype=jnp.float64)
+    w = jnp.asarray(weights, dtype=jnp.float64)
     tau = 0.5 * sigma * (1.0 + x)
     h = local_heading(heading0, curvature0, curvature_rate, tau)
     half = 0.5 * sigma
@@ -91,12 +100,20 @@ def _heading_and_curvature(track: "Track", s):
 
 
 def centreline_position(track: "Track", s: Float[ArrayLike, ""]) -> Float[Array, "3"]:
-    """Centreline point ``(X, Y, 0)`` [m], global frame, at arc length ``s`` [m]."""
+    """Centreline point ``(X, Y, 0)`` [m], global frame, at arc length ``s`` [m]:
+    integrated from the nearest coarse sample of its segment (``track.sample_s``,
+    ``sample_xy``: ``k + 1`` per segment, ends included, evenly spaced), so that a
+    short rule suffices (module docstring)."""
     i, sigma = _locate(track, s)
-    dx, dy = local_offset(
-        track.heading_start[i], track.curvature_start[i], track.curvature_rate[i], sigma
-    )
-    return jnp.stack([track.x_start[i] + dx, track.y_start[i] + dy, jnp.zeros_like(dx)])
+    per_segment = track.sample_s.shape[0] // track.n_segments  # k + 1 (static)
+    spacing = track.segment_length[i] / (per_segment - 1)
+    j = jnp.clip(jnp.round(sigma / spacing), 0, per_segment - 1)
+    at = j * spacing  # the sample's local distance [m]
+    curvature0, rate = track.curvature_start[i], track.curvature_rate[i]
+    dx, dy = local_offset(local_heading(track.heading_start[i], curvature0, rate, at),
+                          curvature0 + rate * at, rate, sigma - at, nodes=FROM_SAMPLE_NODES)
+    sample = track.sample_xy[i * per_segment + j.astype(jnp.int32)]
+    return jnp.stack([sample[0] + dx, sample[1] + dy, jnp.zeros_like(dx)])
 
 
 def heading(track: "Track", s: Float[ArrayLike, ""]) -> Float[Array, ""]:

@@ -36,7 +36,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._float64 import require_float64
-from .geometry import local_heading, local_offset
+from .geometry import MIN_SAMPLES_PER_SEGMENT, local_heading, local_offset
 from .flexible import FlexibleTrack
 from .irregularity import Irregularity
 from .rails import Rails, standard_rails
@@ -162,8 +162,9 @@ class Track(eqx.Module):
             rail_centre_distance: distance between rail centres [m] for the cant angle.
             allow_curvature_jumps: accept curvature steps at joints (e.g. a straight
                 directly followed by an arc). Cant steps are never accepted.
-            samples_per_segment: coarse samples per segment for the projection's
-                initial guess (static).
+            samples_per_segment: coarse samples per segment (at least 8, static):
+                the projection's initial guess, and where the centreline's integral
+                starts (:func:`~jaxrail.track.centreline_position`).
             rails: the track's :class:`~jaxrail.track.rails.Rails` (default
                 :func:`~jaxrail.track.rails.standard_rails`).
 
@@ -177,10 +178,12 @@ class Track(eqx.Module):
             raise ValueError("segments: empty layout; give at least one segment")
         if len(start) != 3:
             raise ValueError(f"start must be (X0, Y0, heading0), got {start!r}")
-        if not isinstance(samples_per_segment, int) or samples_per_segment < 1:
+        if (not isinstance(samples_per_segment, int)
+                or samples_per_segment < MIN_SAMPLES_PER_SEGMENT):
             raise ValueError(
-                f"samples_per_segment must be a positive int, got {samples_per_segment!r}"
-            )
+                f"samples_per_segment must be an int >= {MIN_SAMPLES_PER_SEGMENT} (the "
+                f"centreline is integrated from the nearest sample), got "
+                f"{samples_per_segment!r}")
         base = _scalar(rail_centre_distance, "rail_centre_distance")
         base_value = _concrete(base)
         if base_value is not None and not base_value > 0.0:

@@ -18,7 +18,10 @@ Valid for points within a few metres of the centreline (lateral well below the
 curve radius), including beyond the ends (the end segments extended, see
 :mod:`jaxrail.track.geometry`). The track is planar, so the vertical coordinate of
 the point does not affect ``s``. From the nearest coarse sample Newton needs about
-two steps to reach 1e-12 m on railway layouts; the default is four. Where the
+two steps to reach 1e-12 m on railway layouts; the default is two, and the final
+step makes three (on the paper's curve, 20 000 points up to 1.5 m from the
+centreline and 20 m beyond its ends, within 1.2e-13 m of the arc length they were
+placed at: docs/track.md). Where the
 layout comes back within a few samples' spacing of itself (loops, crossings) the
 nearest sample can belong to the wrong branch: pass ``s_guess`` there.
 """
@@ -58,7 +61,7 @@ def project(
     track: "Track",
     point: Float[ArrayLike, "3"],
     s_guess: Float[ArrayLike, ""] | None = None,
-    iterations: int = 4,
+    iterations: int = 2,
 ) -> Float[Array, ""]:
     """Arc length [m] of the track cross-section whose normal plane contains ``point``.
 
