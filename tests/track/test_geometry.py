@@ -158,6 +158,30 @@ def test_arc_matches_exact_circle(direction):
     np.testing.assert_allclose(curv_v(track, s), sign / radius, rtol=1e-15)
 
 
+def test_integral_from_the_nearest_sample_with_the_fewest_samples():
+    # A nearly full turn of 120 m radius with 8 samples (the fewest a layout takes):
+    # half a spacing turns the heading by 0.37 rad. The circle at points on both sides
+    # of each switch to the next sample (the spacings' midpoints), and no jump there.
+    x0, y0, h0, radius = 3.0, 5.0, -0.2, 120.0
+    length = 0.95 * 2 * np.pi * radius
+    fewest = T.Track.from_segments([T.Arc(length, radius, "left")], start=(x0, y0, h0),
+                                   samples_per_segment=8)
+    spacing = length / 8
+    switches = spacing * (np.arange(8) + 0.5)
+    s = np.concatenate([switches - 1e-7, switches + 1e-7, np.linspace(0.0, length, 501)])
+    centre = np.array([x0 - radius * np.sin(h0), y0 + radius * np.cos(h0)])
+    angle = h0 + s / radius
+    exact = np.stack([centre[0] + radius * np.sin(angle), centre[1] - radius * np.cos(angle)], 1)
+    got = np.asarray(pos_v(fewest, s))[:, :2]
+    np.testing.assert_allclose(got, exact, rtol=0, atol=1e-11)
+    # across each switch the point moves by 2e-7 m along the tangent, to 1e-12 m
+    step = got[8:16] - got[:8]
+    tangent = np.stack([np.cos(h0 + switches / radius), np.sin(h0 + switches / radius)], 1)
+    np.testing.assert_allclose(step, 2e-7 * tangent, rtol=0, atol=1e-12)
+    with pytest.raises(ValueError, match="samples_per_segment must be an int >= 8"):
+        T.Track.from_segments([T.Arc(length, radius, "left")], samples_per_segment=7)
+
+
 def clothoid_reference(sigma, radius, length):
     """Clothoid from the origin, heading 0, curvature sigma / (radius * length)."""
     a = np.sqrt(radius * length * np.pi)
