@@ -13,6 +13,7 @@ Usage: ``python benchmarks/revision_agreement.py --against b86628e [--duration 3
 """
 
 import argparse
+import contextlib
 import json
 import os
 import subprocess
@@ -22,7 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
+from _worktree import ROOT, revision_tree  # benchmarks/_worktree.py, beside this script
+
 
 RUN = """
 import sys, time, numpy as np
@@ -102,10 +104,9 @@ def main():
             roots["working"] = Path(folder) / "revision"
         trees = [(roots["against"], args.against)] + (
             [] if args.revision is None else [(roots["working"], args.revision)])
-        for tree, revision in trees:
-            subprocess.run(["git", "worktree", "add", "--detach", str(tree), revision],
-                           cwd=ROOT, check=True, capture_output=True)
-        try:
+        with contextlib.ExitStack() as checked_out:
+            for tree, revision in trees:
+                checked_out.enter_context(revision_tree(revision, tree))
             for scenario in args.scenarios:
                 for contact in args.contacts:
                     runs = run_pair(roots, scenario, args.duration, contact, folder,
@@ -121,10 +122,6 @@ def main():
                                       "jaxrail": str(r["module"])}
                     out["runs"].append(row)
                     print(json.dumps(row), file=sys.stderr)
-        finally:
-            for tree, _ in trees:
-                subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=ROOT,
-                               check=False, capture_output=True)
     out["load_after"] = os.getloadavg()
     print(json.dumps(out, indent=1))
 

@@ -24,7 +24,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+from _worktree import ROOT, revision_tree
 
 # one variant in a process of its own, with the tree's own package and rhs_profile
 TIME = """
@@ -85,32 +85,26 @@ def main():
            "working_tree": subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, check=True,
                                           capture_output=True, text=True).stdout.strip(),
            "load_before": os.getloadavg()}
-    with tempfile.TemporaryDirectory() as folder:
-        before = Path(folder) / "before"
-        subprocess.run(["git", "worktree", "add", "--detach", str(before), args.against],
-                       cwd=ROOT, check=True, capture_output=True)
+    with tempfile.TemporaryDirectory() as folder, \
+            revision_tree(args.against, Path(folder) / "before") as before:
         variants = {"before": (before, False), "after": (ROOT, False),
                     "after-kernels": (ROOT, True)}
-        try:
-            for contact in args.contacts:
-                times = {name: [] for name in variants}
-                for _ in range(args.rounds):
-                    for name, (root, kernels) in variants.items():
-                        times[name].append(time_variant(root, contact, args.calls, kernels))
-                medians = {name: {key: round(statistics.median(t[key] for t in runs), 1)
-                                  for key in ("rhs_us", "imex_step_us")}
-                           for name, runs in times.items()}
-                out[contact] = {
-                    "median_us": medians,
-                    "all_us": times,
-                    "before_over": {name: {key: round(medians["before"][key] / m[key], 2)
-                                           for key in m}
-                                    for name, m in medians.items() if name != "before"},
-                }
-                print(json.dumps({contact: out[contact]["median_us"]}), file=sys.stderr)
-        finally:
-            subprocess.run(["git", "worktree", "remove", "--force", str(before)], cwd=ROOT,
-                           check=False, capture_output=True)
+        for contact in args.contacts:
+            times = {name: [] for name in variants}
+            for _ in range(args.rounds):
+                for name, (root, kernels) in variants.items():
+                    times[name].append(time_variant(root, contact, args.calls, kernels))
+            medians = {name: {key: round(statistics.median(t[key] for t in runs), 1)
+                              for key in ("rhs_us", "imex_step_us")}
+                       for name, runs in times.items()}
+            out[contact] = {
+                "median_us": medians,
+                "all_us": times,
+                "before_over": {name: {key: round(medians["before"][key] / m[key], 2)
+                                       for key in m}
+                                for name, m in medians.items() if name != "before"},
+            }
+            print(json.dumps({contact: out[contact]["median_us"]}), file=sys.stderr)
     out["load_after"] = os.getloadavg()
     print(json.dumps(out, indent=1))
 
