@@ -9,6 +9,8 @@ centre of its interpenetration for a wide one (:func:`overlap_centre`), so that 
 positions move continuously as the pose changes, also in conformal contact.
 """
 
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
@@ -82,43 +84,111 @@ def find_patches(
     left = jnp.concatenate([jnp.full((1,), _NO_PATCH), inside[:-1]])
     right = jnp.concatenate([inside[1:], jnp.full((1,), _NO_PATCH)])
     is_peak = member & ((inside >= left) & (inside > right) | (inside > left) & (inside >= right))
+    runs = _Runs.of(inside, is_peak)
 
-    # Peaks ranked 1..m in lateral order; strips from peak r up to peak r + 1 have rank r.
-    rank = jnp.cumsum(is_peak)
-    count = rank[-1]
-    peak_rank = jnp.where(is_peak, rank, 0)
+    # Per peak (at its strip): the saddles to the previous and the next peak of its run
+    # (NO_PATCH where there is none, or where a non-member breaks the run), and the cut.
     # Strip depths, not parabola peaks: the largest strip depth of a maximum is continuous
     # when the maximum moves from one strip to the next, the parabola's estimate is not.
-    peak_depth = jax.ops.segment_max(jnp.where(is_peak, inside, _NO_PATCH), peak_rank, num_segments=n + 1)
-    peak_index = jax.ops.segment_max(jnp.where(is_peak, jnp.arange(n), -1), peak_rank, num_segments=n + 1)
-    saddle = jax.ops.segment_min(inside, rank, num_segments=n + 1)  # non-members break the run
-    ranks = jnp.arange(n + 1)
-    saddle = jnp.where((ranks >= 1) & (ranks < count), saddle, _NO_PATCH)  # saddle after peak r
-
-    def cut_toward(s, own, other):
-        excess_own, excess_other = own - s, other - s
-        total = excess_own + excess_other
-        shared = (s > 0.0) & (total > 0.0)
-        return jnp.where(shared, s * excess_other / jnp.where(shared, total, 1.0), 0.0)
-
-    next_depth = jnp.concatenate([peak_depth[1:], jnp.full((1,), _NO_PATCH)])
-    previous_depth = jnp.concatenate([jnp.full((1,), _NO_PATCH), peak_depth[:-1]])
-    previous_saddle = jnp.concatenate([jnp.full((1,), _NO_PATCH), saddle[:-1]])
-    cut_right = cut_toward(saddle, peak_depth, next_depth)
-    cut_left = cut_toward(previous_saddle, peak_depth, previous_depth)
+    cut_right = _cut_toward(runs.right_saddle, inside, runs.at(inside, runs.following))
+    cut_left = _cut_toward(runs.left_saddle, inside, runs.at(inside, runs.preceding))
     cut = jnp.maximum(cut_right, cut_left)
-    exists = (ranks >= 1) & (ranks <= count)
-    score = jnp.where(exists, peak_depth - cut, 2.0 * _NO_PATCH)
-    slots = _top_indices(score, max_patches)
-    found = exists[slots]
-    order = jnp.argsort(jnp.where(found, slots, slots + n + 1))  # lateral order, empty last
-    slots, found = slots[order], found[order]
+    score = jnp.where(is_peak, inside - cut, 2.0 * _NO_PATCH)
+    chosen = _top_indices(score, max_patches)
+    found = is_peak[chosen]
+    chosen, found = _lateral_order(chosen, found, n)
     # The fraction of its depth a maximum keeps: applied to the refined depth, it leaves
     # isolated maxima untouched and takes a maximum born from a shoulder from zero.
-    shared = found & (cut[slots] > 0.0)
-    keep = jnp.where(shared, 1.0 - cut[slots] / jnp.where(shared, peak_depth[slots], 1.0), 1.0)
-    weights = _strip_shares(depth, inside, rank, count, saddle, cut_left, cut_right, slots, found)
-    return jnp.maximum(peak_index[slots], 0), found, keep, weights
+    shared = found & (cut[chosen] > 0.0)
+    keep = jnp.where(shared, 1.0 - cut[chosen] / jnp.where(shared, inside[chosen], 1.0), 1.0)
+    weights = _strip_shares(depth, inside, runs, cut_left, cut_right, chosen, found)
+    return jnp.where(found, chosen, 0), found, keep, weights
+
+
+def _cut_toward(s, own, other):
+    """The depth [m] a maximum ``own`` gives up to the maximum ``other`` across the saddle
+    ``s`` (:func:`find_patches`); zero where the saddle is not above the rail."""
+    excess_own, excess_other = own - s, other - s
+    total = excess_own + excess_other
+    shared = (s > 0.0) & (total > 0.0)
+    return jnp.where(shared, s * excess_other / jnp.where(shared, total, 1.0), 0.0)
+
+
+class _Runs(NamedTuple):
+    """The peaks of a row of strips, each strip's place between them, and the saddles
+    (member depths ``inside`` (n,), non-members at ``_NO_PATCH``). Strip indices are
+    int32; ``-1`` stands for no peak before, ``n`` for none after.
+
+    Each strip belongs to the segment of the last peak at or before it (strips before
+    the first peak to a segment of their own); a peak's saddle toward the next peak is
+    the smallest depth of its segment, toward the previous one that of the previous
+    segment. Computed with cumulative maxima, minima and sums and one segmented
+    minimum (an associative scan): no scatter and no sort, so that a loop holding the
+    search compiles into one kernel (:mod:`jaxrail.compilation.loop_kernels`)."""
+
+    preceding_at: jax.Array  # (n,) the last peak at or before each strip
+    following: jax.Array  # (n,) the first peak after each strip
+    preceding: jax.Array  # (n,) the last peak before each strip
+    left_saddle: jax.Array  # (n,) [m] at a peak: its saddle toward the previous peak
+    right_saddle: jax.Array  # (n,) [m] at a peak: its saddle toward the next peak
+    minima_so_far: jax.Array  # (n,) int32: strips at their segment's smallest depth, cumulative
+
+    @classmethod
+    def of(cls, inside, is_peak):
+        n = inside.shape[0]
+        strips = jnp.arange(n, dtype=jnp.int32)
+        preceding_at = jax.lax.cummax(jnp.where(is_peak, strips, -1))
+        following_at = jax.lax.cummin(jnp.where(is_peak, strips, n), reverse=True)
+        following = jnp.concatenate([following_at[1:], jnp.full((1,), n, jnp.int32)])
+        preceding = jnp.concatenate([jnp.full((1,), -1, jnp.int32), preceding_at[:-1]])
+        _, lowest = jax.lax.associative_scan(_segmented_min, (is_peak, inside))
+        # a peak's segment ends before the next peak; the last one has no saddle after it
+        right_saddle = jnp.where(following < n, lowest[jnp.maximum(following - 1, 0)], _NO_PATCH)
+        left_saddle = jnp.where(preceding >= 0, lowest[jnp.maximum(strips - 1, 0)], _NO_PATCH)
+        # the saddle each strip's segment ends at (none before the first peak)
+        saddle = jnp.where(preceding_at >= 0, right_saddle[jnp.maximum(preceding_at, 0)],
+                           _NO_PATCH)
+        at_min = inside == saddle
+        return cls(preceding_at, following, preceding, left_saddle, right_saddle,
+                   jnp.cumsum(at_min, dtype=jnp.int32))
+
+    @staticmethod
+    def at(values, index):
+        """``values`` (n,) at strip ``index``, ``_NO_PATCH`` where it is -1 or n."""
+        n = values.shape[0]
+        return jnp.where((index >= 0) & (index < n), values[jnp.clip(index, 0, n - 1)],
+                         _NO_PATCH)
+
+    def basin(self):
+        """(n,) the peak whose basin each strip is in: its segment's peak up to the first
+        strip at the segment's smallest depth, the next peak after it; strips before the
+        first peak belong to it, those after the last peak's saddle to the last peak
+        (n where there is no peak)."""
+        n = self.following.shape[0]
+        start = jnp.maximum(self.preceding_at, 0)  # strips before the first peak: from 0
+        before_start = jnp.where(start > 0, self.minima_so_far[jnp.maximum(start - 1, 0)], 0)
+        before_self = jnp.concatenate([jnp.zeros((1,), jnp.int32), self.minima_so_far[:-1]])
+        past_saddle = before_self - before_start > 0
+        in_segment = jnp.where(past_saddle & (self.following < n), self.following,
+                               self.preceding_at)
+        return jnp.where(self.preceding_at < 0, self.following, in_segment)
+
+
+def _segmented_min(a, b):
+    """Combine of a segmented running minimum: segments start where the flag is set."""
+    starts_a, lowest_a = a
+    starts_b, lowest_b = b
+    return starts_a | starts_b, jnp.where(starts_b, lowest_b, jnp.minimum(lowest_a, lowest_b))
+
+
+def _lateral_order(chosen, found, n):
+    """``chosen`` strips and ``found`` flags (k,) reordered: found slots in lateral order,
+    empty ones after them (by a count of smaller keys: no sort)."""
+    key = jnp.where(found, chosen, chosen + n)
+    position = jnp.sum(key[None, :] < key[:, None], axis=1)
+    into = position[None, :] == jnp.arange(key.shape[0])[:, None]  # (slot, chosen)
+    return (jnp.sum(jnp.where(into, chosen[None, :], 0), axis=1),
+            jnp.any(into & found[None, :], axis=1))
 
 
 def _top_indices(score, k: int):
@@ -131,36 +201,33 @@ def _top_indices(score, k: int):
         best = jnp.argmax(score)
         chosen.append(best)
         score = jnp.where(positions == best, -jnp.inf, score)
-    return jnp.stack(chosen)
+    return jnp.stack(chosen).astype(jnp.int32)
 
 
-def _strip_shares(depth, inside, rank, count, saddle, cut_left, cut_right, slots, found):
-    """Each slot's share [m] of every strip's positive depth (see :func:`find_patches`)."""
+def _strip_shares(depth, inside, runs, cut_left, cut_right, chosen, found):
+    """Each slot's share [m] of every strip's positive depth (see :func:`find_patches`);
+    ``chosen``: each slot's peak strip."""
     n = depth.shape[0]
-    strips = jnp.arange(n)
-    # The saddle strip after each peak (the first strip of its segment at the minimum).
-    at_min = inside == saddle[rank]
-    saddle_index = jax.ops.segment_min(jnp.where(at_min, strips, n), rank, num_segments=n + 1)
-    basin = jnp.clip(rank + (strips > saddle_index[rank]), 1, jnp.maximum(count, 1))
-    level_left = jnp.maximum(jnp.concatenate([jnp.zeros(1), saddle[:-1]]), 0.0)  # before peak r
-    level_right = jnp.maximum(saddle, 0.0)  # after peak r
+    basin = runs.basin()
+    b = jnp.minimum(basin, n - 1)  # n: no peak at all, and no slot found
+    level_left = jnp.maximum(runs.left_saddle[b], 0.0)  # before the basin's peak
+    level_right = jnp.maximum(runs.right_saddle[b], 0.0)  # after it
     toward_right = level_right >= level_left
     level = jnp.where(toward_right, level_right, level_left)
-    cut = jnp.where(toward_right, cut_right, cut_left)
-    neighbour = jnp.where(toward_right, jnp.arange(n + 1) + 1, jnp.arange(n + 1) - 1)
+    cut = jnp.where(toward_right, cut_right[b], cut_left[b])
+    neighbour = jnp.where(toward_right, runs.following[b], runs.preceding[b])
     kept = jnp.where(level > 0.0, (level - cut) / jnp.where(level > 0.0, level, 1.0), 1.0)
 
     positive = jnp.maximum(depth, 0.0)
-    strip_level = level[basin]
-    above = jnp.maximum(positive - strip_level, 0.0)
+    above = jnp.maximum(positive - level, 0.0)
     below = positive - above  # min(depth, level), the layer shared across the saddle
-    own = above + kept[basin] * below
-    given = (1.0 - kept[basin]) * below
+    own = above + kept * below
+    given = (1.0 - kept) * below
 
     def share(slot):
-        return jnp.where(basin == slot, own, 0.0) + jnp.where(neighbour[basin] == slot, given, 0.0)
+        return jnp.where(basin == slot, own, 0.0) + jnp.where(neighbour == slot, given, 0.0)
 
-    return jnp.where(found[:, None], jax.vmap(share)(slots), 0.0)
+    return jnp.where(found[:, None], jax.vmap(share)(chosen), 0.0)
 
 
 # A patch whose interpenetration is narrower than WIDE_FROM (its breadth: area over
@@ -172,27 +239,34 @@ WIDE_FROM, WIDE_FULL = 3.0e-3, 6.0e-3
 
 
 def _segment_moments(weights, depth, y_grid, origin):
-    """Zeroth, first and second moments of a patch's weight density about ``origin``.
+    """Zeroth, first and second moments of each patch's weight density about its
+    ``origin`` [m]: ``weights`` (..., n) and ``origin`` (...) for any number of patches
+    over the same strips.
 
     The density is linear between strips; where the signed ``depth`` changes sign
     between two strips, it falls to zero at the crossing of the linear interpolant, so
-    the moments change continuously as a patch edge passes a strip."""
-    x = y_grid - origin
-    w0, w1, d0, d1 = weights[:-1], weights[1:], depth[:-1], depth[1:]
-    x0, x1 = x[:-1], x[1:]
+    the moments change continuously as a patch edge passes a strip. The segments'
+    geometry is the same for every patch, computed once; each segment's moments about
+    its own middle are ``L (a + b) / 2``, ``L^2 (b - a) / 12`` and ``L^3 (a + b) / 24``
+    (length L, density a and b at its ends), moved to the origin with the segment's
+    offset from it (small wherever a patch has weight, so no digits cancel)."""
+    x0, x1 = y_grid[:-1], y_grid[1:]
+    d0, d1 = depth[:-1], depth[1:]
     in0, in1 = d0 > 0.0, d1 > 0.0
     fall = jnp.where(in0 & ~in1, d0 / jnp.where(in0 & ~in1, d0 - d1, 1.0), 1.0)  # share of the segment
     rise = jnp.where(in1 & ~in0, d1 / jnp.where(in1 & ~in0, d1 - d0, 1.0), 1.0)
     start = jnp.where(in1 & ~in0, x1 - rise * (x1 - x0), x0)
     end = jnp.where(in0 & ~in1, x0 + fall * (x1 - x0), x1)
-    a = jnp.where(in0, w0, 0.0)
-    b = jnp.where(in1, w1, 0.0)
     length = jnp.where(in0 | in1, end - start, 0.0)
-    m0 = length * (a + b) / 2.0
-    m1 = length * (a * (2.0 * start + end) + b * (start + 2.0 * end)) / 6.0
-    m2 = length * (a * (3.0 * start**2 + 2.0 * start * end + end**2)
-                   + b * (start**2 + 2.0 * start * end + 3.0 * end**2)) / 12.0
-    return jnp.sum(m0), jnp.sum(m1), jnp.sum(m2)
+    middle = 0.5 * (start + end)
+    a = jnp.where(in0, weights[..., :-1], 0.0)
+    b = jnp.where(in1, weights[..., 1:], 0.0)
+    offset = middle - jnp.expand_dims(jnp.asarray(origin), -1)
+    own0 = 0.5 * length * (a + b)
+    own1 = length**2 / 12.0 * (b - a)
+    own2 = length**3 / 24.0 * (a + b)
+    return (jnp.sum(own0, axis=-1), jnp.sum(own1 + offset * own0, axis=-1),
+            jnp.sum(own2 + offset * (2.0 * own1 + offset * own0), axis=-1))
 
 
 def wide_point(y_deepest, centre, breadth):
@@ -204,11 +278,12 @@ def wide_point(y_deepest, centre, breadth):
     return y_deepest + blend * (centre - y_deepest), blend
 
 
-def overlap_density(weights: Float[Array, " n"], depth: Float[Array, " n"], y_grid: Float[Array, " n"],
-                    y_deepest):
+def overlap_density(weights: Float[Array, "... n"], depth: Float[Array, " n"],
+                    y_grid: Float[Array, " n"], y_deepest):
     """Centre, breadth and overlap curvature of a patch's share of the interpenetration.
 
-    Arguments as :func:`overlap_centre`. Returns ``(centre, breadth, curvature)``: the
+    Arguments as :func:`overlap_centre`, or ``weights`` (k, n) and ``y_deepest`` (k,) for
+    k patches at once. Returns ``(centre, breadth, curvature)``: the
     lateral coordinate of the centroid of the weight density [m] (``y_deepest`` where
     the patch has no weight), its area over its largest value [m], and the relative
     lateral curvature [1/m] a parabolic gap would need to overlap as widely,
@@ -218,7 +293,7 @@ def overlap_density(weights: Float[Array, " n"], depth: Float[Array, " n"], y_gr
     m0, m1, m2 = _segment_moments(weights, depth, y_grid, y_deepest)
     # the largest weight by its index, not jnp.max: max's derivative divides by the count
     # of entries equal to it, which XLA can make zero by computing the two differently
-    peak = weights[jnp.argmax(weights)]
+    peak = jnp.take_along_axis(weights, jnp.argmax(weights, axis=-1)[..., None], axis=-1)[..., 0]
     some = (m0 > 0.0) & (peak > 0.0)
     safe_m0 = jnp.where(some, m0, 1.0)
     breadth = jnp.where(some, m0 / jnp.where(some, peak, 1.0), 0.0)

@@ -135,8 +135,7 @@ def _surface_patches(surface, surface_index, wheel, rail, geometry, config, slot
     index, active, keep, weights = find_patches(strips.depth, slots)
     depth_fn = lambda y: point(y, False).depth  # noqa: E731
     y_star = jax.vmap(lambda i: refine_maximum(depth_fn, y_grid, strips.depth, i, surface.domain))(index)
-    centre, breadth, overlap = jax.vmap(lambda w, y: overlap_density(w, strips.depth, y_grid, y))(
-        weights, y_star)
+    centre, breadth, overlap = overlap_density(weights, strips.depth, y_grid, y_star)
     y_contact, blend = wide_point(y_star, centre, breadth)
     stretch = 1.0 + jax.vmap(surface.slope)(y_star) ** 2  # (arc length / wheel coordinate)^2
     stencil, span = jax.vmap(lambda y, k: secant_stencil(y, surface.domain, SECANT_SPAN / jnp.sqrt(k)))(
