@@ -12,6 +12,7 @@ and compare revisions in one session (the load is in the JSON).
 """
 
 import argparse
+import contextlib
 import json
 import os
 import subprocess
@@ -21,7 +22,8 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+from _worktree import ROOT, revision_tree
+
 SITE = Path(__file__).resolve().parent / "_suite_compile"  # its sitecustomize.py
 FIELDS = ("compile_s", "compile_cpu_s", "trace_s", "lower_s", "programs")
 
@@ -114,21 +116,13 @@ def main():
     parser.add_argument("pytest_args", nargs="*")
     args = parser.parse_args()
     load = os.getloadavg()
-    with tempfile.TemporaryDirectory() as scratch:
-        tree = ROOT
-        if args.revision:
-            tree = Path(scratch) / "tree"
-            subprocess.run(["git", "worktree", "add", "--detach", str(tree), args.revision],
-                           cwd=ROOT, check=True, capture_output=True)
-        try:
-            events = Path(scratch) / "events"
-            run = run_suite(tree, args.pytest_args, events)
-            reports = [[json.loads(line) for line in p.read_text().splitlines() if line]
-                       for p in sorted(events.glob("*.jsonl"))]
-        finally:
-            if args.revision:
-                subprocess.run(["git", "worktree", "remove", "--force", str(tree)],
-                               cwd=ROOT, capture_output=True)
+    with tempfile.TemporaryDirectory() as scratch, contextlib.ExitStack() as stack:
+        tree = (stack.enter_context(revision_tree(args.revision, Path(scratch) / "tree"))
+                if args.revision else ROOT)
+        events = Path(scratch) / "events"
+        run = run_suite(tree, args.pytest_args, events)
+        reports = [[json.loads(line) for line in p.read_text().splitlines() if line]
+                   for p in sorted(events.glob("*.jsonl"))]
     result = {"revision": args.revision or "working tree", **run,
               "load_at_start": [round(x, 2) for x in load],
               "load_at_end": [round(x, 2) for x in os.getloadavg()],

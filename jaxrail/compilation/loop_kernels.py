@@ -8,8 +8,11 @@ stage loop holds none of them once YNNPACK's fusions are off (its inverse and th
 projection are plain operations), so with the threshold raised XLA compiles the stages
 of each step, right-hand sides included, as one kernel; the step loop around them keeps
 the progress report (an FFI call) and stays as it is, so a run with a bar is the run
-without one. Measured on 8 s of the paper's curve: 0.52 of the time in table mode,
-0.78 online, for 1.5 to 2 times the compile (docs/simulation.md, "Loops as kernels").
+without one. That holds in both contact modes: the search finds its patches without
+scatter or sort (:func:`jaxrail.contact.patches.find_patches`). Measured on 8 s of the
+paper's curve: 0.52 of the time in table mode for 1.5 to 2 times the compile; online
+0.63 of the time of the stage loop that was not one kernel (while the search still
+held them), for 2.7 times its compile (docs/simulation.md, "Loops as kernels").
 
 The threshold can only be set through ``XLA_FLAGS``, read once when JAX starts its
 backend, and it applies to every program of the process: :func:`use_loop_kernels`
