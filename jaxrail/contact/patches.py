@@ -135,6 +135,7 @@ class _Runs(NamedTuple):
 
     @classmethod
     def of(cls, inside, is_peak):
+        """The runs of a row: member depths ``inside`` (n,) [m], ``is_peak`` (n,) bool."""
         n = inside.shape[0]
         strips = jnp.arange(n, dtype=jnp.int32)
         preceding_at = jax.lax.cummax(jnp.where(is_peak, strips, -1))
