@@ -26,6 +26,8 @@ from pathlib import Path
 
 from _worktree import ROOT, revision_tree
 
+from jaxrail.compilation.loop_kernels import THRESHOLD_FLAG
+
 # one variant in a process of its own, with the tree's own package and rhs_profile
 TIME = """
 import json, sys
@@ -58,15 +60,12 @@ print(json.dumps({{"rhs_us": rp.timed_in_loop(rhs, args, {calls})[0],
                   "imex_step_us": rp.timed_in_loop(step, args, {calls})[0]}}))
 """
 
-THRESHOLD = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=10000000000"
-
-
 def time_variant(root, contact, calls, loop_kernels):
     """{"rhs_us", "imex_step_us"} of the tree at ``root`` in a fresh process."""
     env = dict(os.environ, JAXRAIL_COMPILATION_CACHE="off")
     env.pop("XLA_FLAGS", None)
     if loop_kernels:
-        env["XLA_FLAGS"] = THRESHOLD
+        env["XLA_FLAGS"] = THRESHOLD_FLAG
     code = TIME.format(root=str(root), contact=contact, calls=calls)
     done = subprocess.run([sys.executable, "-c", code], env=env, check=True,
                           capture_output=True, text=True, cwd=tempfile.gettempdir())

@@ -116,9 +116,9 @@ def main():
     parser.add_argument("pytest_args", nargs="*")
     args = parser.parse_args()
     load = os.getloadavg()
-    with tempfile.TemporaryDirectory() as scratch, contextlib.ExitStack() as stack:
-        tree = (stack.enter_context(revision_tree(args.revision, Path(scratch) / "tree"))
-                if args.revision else ROOT)
+    with tempfile.TemporaryDirectory() as scratch, (
+            revision_tree(args.revision, Path(scratch) / "tree") if args.revision
+            else contextlib.nullcontext(ROOT)) as tree:
         events = Path(scratch) / "events"
         run = run_suite(tree, args.pytest_args, events)
         reports = [[json.loads(line) for line in p.read_text().splitlines() if line]
