@@ -79,16 +79,20 @@ class StiffJacobian(eqx.Module):
                            jnp.stack([r2, -r3, r0, r1], -1), jnp.stack([r3, r2, -r1, r0], -1)],
                           axis=1)  # (k, 4, 4)
         n = self.a_q.shape[0]
-        select = np.zeros((n, 4 * k))
-        select[index.ravel(), np.arange(4 * k)] = 1.0
+        # row i of the result: row i of a, or for the stiff bodies' Euler parameters row
+        # n + j of [a; turned rows]; one gather with constant indices
+        source = np.arange(n)
+        source[index.ravel()] = n + np.arange(4 * k)
 
         def carried(a):
+            # 4 x 4 products as broadcast sums: XLA:CPU runs a batched dot this small as
+            # a library call per batch, several times slower than one loop fusion
             a3 = a.reshape(n, k, half)
-            e = jnp.einsum("nke,kfe->nkf", a3[:, :, 3:7], right)
+            e = jnp.sum(a3[:, :, None, 3:7] * right[None], axis=-1)
             a = jnp.concatenate([a3[:, :, :3], e, a3[:, :, 7:]], axis=-1).reshape(n, -1)
-            rows = a[index.ravel()].reshape(k, 4, -1)
-            change = jnp.einsum("kfe,kec->kfc", right, rows) - rows
-            return a + jnp.asarray(select) @ change.reshape(4 * k, -1)
+            rows = a[index.ravel()].reshape(k, 1, 4, -1)
+            turned = jnp.sum(right[..., None] * rows, axis=2).reshape(4 * k, -1)
+            return jnp.concatenate([a, turned])[source]
         return StiffJacobian(self.columns, carried(self.a_q), carried(self.a_v), k,
                              self.block_diagonal)
 
