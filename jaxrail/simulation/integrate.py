@@ -75,7 +75,8 @@ def _integrate(loads, start, rest_heights, t1, ts, options, limits, solver, adjo
     vehicle, its parameters, the track) from the :class:`State` ``start`` at 0 to t1
     [s] with ``solver``, saved at ``ts``, stopped by the derailment event (a flexible
     track's rails and the elements' internal states are integrated with the bodies);
-    ``report``: each accepted step's time to the host (:class:`TimeReportingMeter`).
+    ``report``: the time reached to the host, up to 1000 times a run
+    (:class:`TimeReportingMeter`).
     With IMEX the controller counts its load Jacobians (:class:`JacobianCounter`, the
     saved controller state)."""
     controller, dt0 = options.controller()
@@ -145,7 +146,7 @@ def solve(vehicle: Vehicle, params: VehicleParams, track, t1, speed, misalignmen
     ``contact_model``: :mod:`jaxrail.vehicles.loads` (default the paper's search).
     ``options.progress`` is not used here (:func:`~jaxrail.simulation.simulate` draws
     the bar). ``limits``: :class:`DerailmentLimits` (default ones). ``report_progress``:
-    pass each step's time to the host (:mod:`jaxrail._time_report`; it changes no
+    pass the time reached to the host (:mod:`jaxrail._time_report`; it changes no
     value), as :func:`~jaxrail.simulation.simulate` does for its progress bar.
     ``drive``: a :class:`~jaxrail.vehicles.drive.SpeedDrive` holding the speed to its
     programme (default None: the vehicle coasts)."""
