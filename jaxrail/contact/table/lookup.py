@@ -11,7 +11,7 @@ from ...track.rails import lateral_from_centre, rail_under_wheel, wheel_origin
 from ..patches import wide_point
 from ..search import ContactPatches, contact_geometry
 from ..strip import wheel_frame, wheel_surface_point
-from .grid import _RATES, _VALUES, FIELDS, GEOMETRY, ContactTable
+from .grid import _RATES, _VALUES, FIELDS, ContactTable
 from .spline import _pose_weights
 
 
@@ -50,7 +50,8 @@ def _along_levels(heights, fields, vertical, levels):
     the wheel lower at the second; ``fields`` (2, P, F); their depths ``levels`` (2,)),
     by cubic Hermite interpolation in the vertical position (C1): the depth from each
     level's depth and slope (beyond the levels, the nearer level's line), the geometry
-    from its values and rates (beyond the levels, the nearer level's values)."""
+    (a tuple, (P,) per field) from its values and rates (beyond the levels, the nearer
+    level's values)."""
     z0, z1 = heights[0], heights[1]
     span = z0 - z1  # the wheel comes down by this from level i to i + 1
     t = jnp.clip((z0 - vertical) / span, 0.0, 1.0)
@@ -66,7 +67,10 @@ def _along_levels(heights, fields, vertical, levels):
     last = at_level[1] + slope[1] * (z1 - vertical)
     depth = jnp.where(vertical > z0, first, jnp.where(vertical < z1, last, hermite))
     value, rate = fields[:, :, _VALUES], fields[:, :, _RATES]
-    geometry = (h00 * value[0] + h10 * span * rate[0] + h01 * value[1] + h11 * span * rate[1])
+    # field by field: an expression over all fields, sliced by each consumer, is what
+    # XLA fuses into every consumer whole (five times the work)
+    geometry = tuple(h00 * value[0, :, k] + h10 * span * rate[0, :, k] + h01 * value[1, :, k]
+                     + h11 * span * rate[1, :, k] for k in range(value.shape[-1]))
     return depth, geometry
 
 
@@ -99,8 +103,7 @@ def table_patches(table: ContactTable, wheel, track, wheelset_position, wheelset
     fields = jnp.einsum("ln,lnf->lf", weights, block).reshape(2, slots, len(FIELDS))
     depth, interpolated = _along_levels(heights[two], fields, vertical,
                                         jnp.asarray(table.grid.levels)[two])
-    y_deepest, centre, breadth, rail_from_wheel, curvature = (
-        interpolated[:, k] for k in range(len(GEOMETRY)))
+    y_deepest, centre, breadth, rail_from_wheel, curvature = interpolated
     y_wheel, _ = wide_point(y_deepest, centre, breadth)  # as the search places it
     y_rail = y_wheel + rail_from_wheel
     active = depth > 0.0
