@@ -3,7 +3,8 @@ working tree's, in alternating processes.
 
 Each process times one variant as ``benchmarks/rhs_profile.py`` does (that revision's
 own script and package: the whole right-hand side, :func:`jaxrail.vehicles.vehicle_accelerations`,
-and one KenCarp5 step of 1 ms with a new load Jacobian, each in a compiled loop of 50,
+one KenCarp5 step of 1 ms with a new load Jacobian and one that keeps an earlier one
+(turned with the wheelsets, as 7 of 8 steps do in a run), each in a compiled loop of 50,
 median of ``--calls`` loops, at the paper curve's start on rigid rails). The variants
 run in turn, ``--rounds`` times, so that the machine's drift falls on all alike:
 ``before`` (``--against``, checked out into a temporary ``git worktree``, as it was),
@@ -32,12 +33,12 @@ from jaxrail.compilation.loop_kernels import THRESHOLD_FLAG
 TIME = """
 import json, sys
 sys.path[:0] = [{root!r}, {root!r} + "/benchmarks"]
-import jax, diffrax, equinox as eqx
+import jax, jax.numpy as jnp, diffrax, equinox as eqx
 import rhs_profile as rp
 from jaxrail.scenarios import load_scenario
 from jaxrail.contact.table_cache import contact_table
 from jaxrail.multibody import State, rhs as multibody_rhs
-from jaxrail.multibody.imex import IMEX
+from jaxrail.multibody.imex import IMEX, stiff_jacobian
 from jaxrail.vehicles import OnlineContact, TableContact, VehicleLoads, initial_state, vehicle_accelerations
 scenario = load_scenario("paper-curve")
 vehicle, params, track = scenario.build()
@@ -55,13 +56,29 @@ def step(q, qdot, data):
     loads = VehicleLoads(vehicle, params, track, model)
     y0 = State.of(q, qdot, None)
     return IMEX().step(diffrax.ODETerm(multibody_rhs), 0.0, 1e-3, y0, loads, None, False)[0]
+def jacobian(q, qdot, data):
+    vehicle, params, track, model = eqx.combine(data, structure)
+    return stiff_jacobian(0.0, State.of(q, qdot, None), VehicleLoads(vehicle, params, track, model))[1]
 args = (state.q, state.qdot, data)
+kept = jax.jit(jacobian)(*args)
+def step_kept(q, qdot, data):
+    vehicle, params, track, model = eqx.combine(data, structure)
+    loads, y0 = VehicleLoads(vehicle, params, track, model), State.of(q, qdot, None)
+    solver, term = IMEX(jacobian_every=8), diffrax.ODETerm(multibody_rhs)
+    euler = solver.init(term, 0.0, 1e-3, y0, loads)[2]
+    age = jnp.where(q[0] > 1e30, 8, 1).astype(jnp.int32)  # run-time: both branches stay
+    return solver.step(term, 0.0, 1e-3, y0, loads, (kept, age, euler), False)[0]
 print(json.dumps({{"rhs_us": rp.timed_in_loop(rhs, args, {calls})[0],
-                  "imex_step_us": rp.timed_in_loop(step, args, {calls})[0]}}))
+                  "imex_step_us": rp.timed_in_loop(step, args, {calls})[0],
+                  "imex_step_kept_jacobian_us": rp.timed_in_loop(step_kept, args, {calls})[0]}}))
 """
 
+KEYS = ("rhs_us", "imex_step_us", "imex_step_kept_jacobian_us")
+
+
 def time_variant(root, contact, calls, loop_kernels):
-    """{"rhs_us", "imex_step_us"} of the tree at ``root`` in a fresh process."""
+    """{"rhs_us", "imex_step_us", "imex_step_kept_jacobian_us"} of the tree at ``root``
+    in a fresh process."""
     env = dict(os.environ, JAXRAIL_COMPILATION_CACHE="off")
     env.pop("XLA_FLAGS", None)
     if loop_kernels:
@@ -94,7 +111,7 @@ def main():
                 for name, (root, kernels) in variants.items():
                     times[name].append(time_variant(root, contact, args.calls, kernels))
             medians = {name: {key: round(statistics.median(t[key] for t in runs), 1)
-                              for key in ("rhs_us", "imex_step_us")}
+                              for key in KEYS}
                        for name, runs in times.items()}
             out[contact] = {
                 "median_us": medians,
