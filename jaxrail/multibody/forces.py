@@ -51,7 +51,7 @@ from .applied_forces import gravity_forces as gravity_forces
 from .applied_forces import point_force as point_force
 from .applied_forces import tangent
 from .element_geometry import separation as _separation
-from .joints import _check_frame, body_selector, ground_extended, place_bodies, select_bodies
+from .joints import _check_frame, body_rows, body_sums, ground_extended
 
 
 # ---- build-time descriptions --------------------------------------------------
@@ -342,9 +342,7 @@ def _one_element(kind, qi, qj, vi, vj, e, z=None):
 def _pairs(body_i, body_j, x_ext):
     """The rows (k, 7) of x_ext (n + 1, 7) (row n: the ground's) of the elements'
     bodies i and j."""
-    n = x_ext.shape[0] - 1
-    return (select_bodies(body_selector(body_i, n), x_ext),
-            select_bodies(body_selector(body_j, n), x_ext))
+    return body_rows(body_i, x_ext), body_rows(body_j, x_ext)
 
 
 def _coordinate_pairs(body_i, body_j, q):
@@ -369,7 +367,6 @@ def element_loads(kind: str, body_i, body_j, e, q, qdot, z=None):
     has r of them (None otherwise).
     """
     n = q.shape[0] // 7
-    sel_i, sel_j = body_selector(body_i, n), body_selector(body_j, n)
     q_i, q_j = _coordinate_pairs(body_i, body_j, q)
     v_i, v_j = _velocity_pairs(body_i, body_j, qdot)
     if FORCE_KINDS[kind].states == 0:
@@ -379,8 +376,7 @@ def element_loads(kind: str, body_i, body_j, e, q, qdot, z=None):
     else:
         gi, gj, zdot = jax.vmap(lambda a, b, c, d, p, w: _one_element(kind, a, b, c, d, p, w))(
             q_i, q_j, v_i, v_j, e, z)
-    g = jnp.sum(place_bodies(sel_i, gi) + place_bodies(sel_j, gj), axis=0)
-    return g[:n].reshape(-1), zdot
+    return (body_sums(body_i, gi, n) + body_sums(body_j, gj, n)).reshape(-1), zdot
 
 
 def element_forces(kind: str, body_i, body_j, e, q, qdot, z=None) -> Float[Array, " 7n"]:

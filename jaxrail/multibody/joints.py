@@ -18,8 +18,8 @@ rate, and the bias (Phi_q qdot)_q qdot, all analytic (A(p) is quadratic in p), s
 gamma = -bias (`joint_jet`; tests check them against jax.jacfwd and finite differences).
 `joint_terms`, on the right-hand side, differentiates the plain `joint_phi` by AD
 instead (fewer operations than the 14-column Jets). One joint is written once,
-vmapped over all joints of a kind and placed into the global matrices with constant
-one-hot products. The normalisation constraints p_i^T p_i - 1 = 0 (one
+vmapped over all joints of a kind, its bodies' coordinates taken as constant slices
+and its Jacobian placed into the global matrices with constant one-hot products. The normalisation constraints p_i^T p_i - 1 = 0 (one
 per body) come first in Phi.
 """
 
@@ -222,9 +222,20 @@ def body_selector(body, n: int) -> Array:
     return jnp.asarray(np.eye(n + 1)[np.where(b < 0, n, b)])
 
 
-def select_bodies(selector, x_ext) -> Array:
-    """Rows (k, 7) of x_ext (n + 1, 7) picked by a body_selector (k, n + 1)."""
-    return jnp.sum(selector[:, :, None] * x_ext[None], axis=1)
+def body_rows(body, x_ext) -> Array:
+    """Rows (k, ...) of x_ext (n + 1, ...) of static body indices ``body`` (k,) (-1, the
+    ground, is row n): constant slices, stacked (a one-hot product would multiply every
+    row; a gather would make reverse mode scatter)."""
+    n = x_ext.shape[0] - 1
+    return jnp.stack([x_ext[n if b < 0 else b] for b in body])
+
+
+def body_sums(body, blocks, n: int) -> Array:
+    """(n, ...): per body, the sum of the blocks (k, ...) whose static body index
+    ``body`` (k,) is that body's (the ground's, -1, dropped); constant slices added."""
+    zero = jnp.zeros(blocks.shape[1:], blocks.dtype)
+    return jnp.stack([sum((blocks[k] for k, b in enumerate(body) if b == i), zero)
+                      for i in range(n)])
 
 
 def place_bodies(selector, blocks) -> Array:
@@ -252,8 +263,8 @@ def joint_terms(kind: str, body_i, body_j, jp: JointParams, q, qdot):
     v_ext = jnp.concatenate([qdot.reshape(n, 7), jnp.zeros((1, 7))], axis=0)
     value, jac, rate, gamma = jax.vmap(
         lambda qi, qj, vi, vj, p: _joint_terms_one(kind, qi, qj, vi, vj, p))(
-        select_bodies(sel_i, q_ext), select_bodies(sel_j, q_ext),
-        select_bodies(sel_i, v_ext), select_bodies(sel_j, v_ext), jp,
+        body_rows(body_i, q_ext), body_rows(body_j, q_ext),
+        body_rows(body_i, v_ext), body_rows(body_j, v_ext), jp,
     )
     phi_q = place_bodies(sel_i, jac[..., :7]) + place_bodies(sel_j, jac[..., 7:])
     k, neq = value.shape
