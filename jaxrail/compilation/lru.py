@@ -29,3 +29,7 @@ class LruCache:
         if len(self._entries) > self.size:
             self._entries.popitem(last=False)
         return value, True
+
+    def values(self) -> list:
+        """The entries' values, the least recently used first."""
+        return list(self._entries.values())

@@ -134,7 +134,8 @@ def _export(flat, arrays):
 
 def compile_through_program_cache(function, folder, xla_options, /, *args, **kwargs):
     """``function(*args, **kwargs)`` compiled with ``xla_options``: a callable of the
-    same arguments (the arrays may change, not the rest). The traced program comes from
+    same arguments (the arrays may change, not the rest; its ``compiled``: the XLA
+    executable). The traced program comes from
     ``folder`` when it holds one with this key, else it is traced, exported and kept
     there (``folder`` None: traced, not kept)."""
     leaves, treedef = jax.tree.flatten((args, kwargs))
@@ -165,4 +166,5 @@ def compile_through_program_cache(function, folder, xla_options, /, *args, **kwa
         values = [x for x in jax.tree.leaves((args, kwargs)) if eqx.is_array(x)]
         return jax.tree.unflatten(out_tree, compiled(*values))
 
+    run.compiled = compiled  # the executable: its optimised HLO for profiles
     return run
