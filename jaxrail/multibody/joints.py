@@ -19,8 +19,8 @@ gamma = -bias (`joint_jet`; tests check them against jax.jacfwd and finite diffe
 `joint_terms`, on the right-hand side, differentiates the plain `joint_phi` by AD
 instead (fewer operations than the 14-column Jets). One joint is written once,
 vmapped over all joints of a kind, its bodies' coordinates taken as constant slices
-and its Jacobian placed into the global matrices with constant one-hot products. The normalisation constraints p_i^T p_i - 1 = 0 (one
-per body) come first in Phi.
+and its Jacobian placed into the global matrices with constant one-hot products. The
+normalisation constraints p_i^T p_i - 1 = 0 (one per body) come first in Phi.
 """
 
 import dataclasses
