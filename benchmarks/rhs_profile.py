@@ -36,7 +36,8 @@ outside a loop; several times slower for these small programs):
 
 With ``--kernels``, per contact model the kernels of the right-hand side's and the IMEX
 step's loops as XLA:CPU runs them (:func:`jaxrail._kernel_profile.kernel_profile`: each
-kernel's share of the traced time and its executions per evaluation, the 25 largest):
+kernel's share of the traced time and its executions per evaluation, the 25 largest;
+at most ``KERNEL_CALLS`` runs of each loop):
 ``kernels``. The process then runs with XLA's thunk tracing on (it starts itself again
 with the flag).
 
@@ -85,6 +86,9 @@ from jaxrail.vehicles.vehicle import wheelset_states  # noqa: E402
 
 
 LOOP_REPEATS = 50
+# Runs of a loop under the thunk trace: its events are kept in memory (the online
+# search's 40 runs, 2000 evaluations of thousands of kernels each, filled 24 GiB).
+KERNEL_CALLS = 4
 IMEX_STEP = 1e-3  # [s] about the IMEX steps of the paper's curve
 
 
@@ -243,7 +247,7 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch, k
         "elements_by_kind": dict(list(looped["rhs"][2]["by_kind"].items())[:15]),
     }
     if kernels:
-        out["kernels"] = {name: kernels_in_loop(looped[name][3], args, calls)
+        out["kernels"] = {name: kernels_in_loop(looped[name][3], args, min(calls, KERNEL_CALLS))
                           for name in ("rhs", "imex_step")}
     out["operations"]["force_laws"] = out["operations"]["loads"] - out["operations"]["contact"]
     if batch:

@@ -95,25 +95,28 @@ def rail_foot(rail: Profile, eta, zeta, derivatives: bool = True
     """Eq. (15): the rail coordinate ``u`` whose normal passes through ``(eta, zeta)``.
 
     ``(eta, zeta)`` are the point's field-side-lateral and vertical coordinates in the
-    rail section plane [m]. Newton on ``g(u) = (eta - u) + (zeta - f(u)) f'(u)`` from the
-    vertical projection, clipped to the rail domain; unique on a convex head. Returns
+    rail section plane [m]. The profile's closed form where it has one
+    (:meth:`jaxrail.profiles.Profile.normal_foot`: the UIC60 head's arcs and flanks), else
+    Newton on ``g(u) = (eta - u) + (zeta - f(u)) f'(u)`` from the vertical projection,
+    clipped to the rail domain; unique on a convex head. Returns
     ``(u, valid)`` with ``valid = 1.0`` when the point lies over the rail head
     (``eta`` inside the domain), ``u`` did not hit the domain ends and the Newton
     residual converged (below 1e-9 m); elsewhere the depth has no meaning (a strip
     beside the rail, e.g. the back of the flange, is never in contact).
 
-    The steps carry no derivatives; ``u``'s are the implicit function theorem's
+    The closed form and the steps carry no derivatives; ``u``'s are the implicit function theorem's
     (:func:`_foot`), first and second derivatives exact. ``derivatives=False``
     (static): ``u`` without derivatives, for a caller that differentiates only the
     depth (:func:`depth_at_foot`).
     """
     lo, hi = rail.domain
     fixed = frozen((rail, eta, zeta))
-    # the last step is _foot's where u carries derivatives
-    u, _ = jax.lax.scan(lambda u, _: (_foot_newton(*fixed, u)[0], None),
-                        jnp.clip(fixed[1], lo, hi), None,
-                        length=RAIL_NEWTON_STEPS - (1 if derivatives else 0))
-    u = _foot(rail, eta, zeta, u) if derivatives else u  # the scan's u has no derivatives
+    u = fixed[0].normal_foot(*fixed[1:])
+    if u is None:  # the last step is _foot's where u carries derivatives
+        u, _ = jax.lax.scan(lambda u, _: (_foot_newton(*fixed, u)[0], None),
+                            jnp.clip(fixed[1], lo, hi), None,
+                            length=RAIL_NEWTON_STEPS - (1 if derivatives else 0))
+    u = _foot(rail, eta, zeta, u) if derivatives else u  # the search's u has no derivatives
     converged = jnp.abs(_foot_newton(*fixed, jax.lax.stop_gradient(u))[1]) < 1e-9
     valid = (eta > lo) & (eta < hi) & (u > lo) & (u < hi) & converged
     return u, jnp.where(valid, 1.0, 0.0)

@@ -59,6 +59,13 @@ class Profile(eqx.Module):
         (h, h1), (_, h2) = jax.jvp(height_and_slope, (y,), (one,))
         return h, h1, h2
 
+    def normal_foot(self, eta: Float[ArrayLike, ""], zeta: Float[ArrayLike, ""]):
+        """The coordinate ``u`` [m] of the point whose normal passes through the point
+        ``(eta, zeta)`` [m] of the profile's plane, in closed form, or None where the
+        profile has none (the contact search then takes Newton steps,
+        :func:`jaxrail.contact.strip.rail_foot`)."""
+        return None
+
     def slope(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
         """``d height / d y`` [-] at ``y`` [m]."""
         return self.height_derivatives(y)[1]

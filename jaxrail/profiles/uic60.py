@@ -90,6 +90,7 @@ _HEAD = _uncanted_field_side()
 _PIECES = ("flank", "corner", "side", "crown", "side", "corner", "flank")
 _IS_LINE = np.array([name == "flank" for name in _PIECES])
 _GAUGE = np.array([-1.0, 1.0])  # mirror a field-side point to the gauge side
+_JOINT_ARC = np.array([1, 1, 2, 3, 4, 5])  # an arc piece at each of the six joints
 
 
 def _point_table():
@@ -277,6 +278,41 @@ class UIC60(ClosedFormProfile):
         index = jnp.sum((y_in > _breaks(table)).astype(jnp.int32))
         h, s, c = _piece_derivatives(jnp, table[index], y_in)
         return h + s * (y - y_in), s, jnp.where(y == y_in, c, 0.0)
+
+
+    def normal_foot(self, eta: Float[ArrayLike, ""], zeta: Float[ArrayLike, ""]) -> Array:
+        """The coordinate ``u`` [m] whose normal passes through ``(eta, zeta)`` [m], in
+        closed form, clipped to the domain (:meth:`Profile.normal_foot`).
+
+        The head is a chain of arcs and two flank lines, tangent at their joints, so the
+        normal lines at the joints divide the plane near the head into one sector per
+        piece: a point lies past joint ``j`` (toward the field side) when its offset from
+        the joint has a positive component along the head's tangent there. In its piece
+        the foot is the arc's point on the ray from the centre through the point, or the
+        point's projection on the flank line. Exact for points closer to the head than
+        its smallest radius (13 mm) on its concave side. A point past the normal line at
+        a domain end gets that end, where the search's Newton steps end too."""
+        table = self._table()
+        joint_y, joint_z = table[1:, 3], table[1:, 7]
+        # the centre of an arc at each joint (the joint's normal line passes through it)
+        centre_y, centre_z = table[_JOINT_ARC, 0], table[_JOINT_ARC, 4]
+        along = (eta - joint_y) * (joint_z - centre_z) - (zeta - joint_z) * (joint_y - centre_y)
+        row = table[jnp.sum((along > 0.0).astype(jnp.int32))]
+        yc, y0, dy, zc, z0, dz, radius, is_line = (row[i] for i in (0, 1, 2, 4, 5, 6, 8, 9))
+        ray = jnp.hypot(eta - yc, zeta - zc)
+        on_arc = yc + radius * (eta - yc) / jnp.where(ray > 0.0, ray, 1.0)
+        on_line = y0 + dy * ((eta - y0) * dy + (zeta - z0) * dz) / (dy * dy + dz * dz)
+        foot = jnp.clip(jnp.where(is_line > 0.5, on_line, on_arc), self.y_min, self.y_max)
+        # past the normal line at a domain end (also deep beside the head, where the
+        # joints' normal lines cross): that end, the nearer one where past both
+        past, distance = [], []
+        for end in self.domain:
+            height, slope, _ = self.height_derivatives(end)
+            past.append((eta - end) + (zeta - height) * slope)
+            distance.append((eta - end) ** 2 + (zeta - height) ** 2)
+        past_low, past_high = past[0] < 0.0, past[1] > 0.0
+        low = past_low & ~(past_high & (distance[1] < distance[0]))
+        return jnp.where(low, self.y_min, jnp.where(past_high, self.y_max, foot))
 
 
 _NAMED_INCLINATIONS = {"1:40": 1.0 / 40.0, "1:20": 1.0 / 20.0, "none": 0.0, "0": 0.0}
