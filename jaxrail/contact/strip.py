@@ -104,8 +104,8 @@ def rail_foot(rail: Profile, eta, zeta, derivatives: bool = True
     residual converged (below 1e-9 m); elsewhere the depth has no meaning (a strip
     beside the rail, e.g. the back of the flange, is never in contact).
 
-    The closed form and the steps carry no derivatives; ``u``'s are the implicit function theorem's
-    (:func:`_foot`), first and second derivatives exact. ``derivatives=False``
+    The closed form and the steps carry no derivatives; ``u``'s are the implicit
+    function theorem's (:func:`_foot`), first and second derivatives exact. ``derivatives=False``
     (static): ``u`` without derivatives, for a caller that differentiates only the
     depth (:func:`depth_at_foot`).
     """

@@ -279,7 +279,6 @@ class UIC60(ClosedFormProfile):
         h, s, c = _piece_derivatives(jnp, table[index], y_in)
         return h + s * (y - y_in), s, jnp.where(y == y_in, c, 0.0)
 
-
     def normal_foot(self, eta: Float[ArrayLike, ""], zeta: Float[ArrayLike, ""]) -> Array:
         """The coordinate ``u`` [m] whose normal passes through ``(eta, zeta)`` [m], in
         closed form, clipped to the domain (:meth:`Profile.normal_foot`).
