@@ -16,6 +16,8 @@ nonlinear stability search (:mod:`jaxrail.stability.nonlinear`) and identificati
   process neither traces nor compiles.
 - :mod:`.tracing`: :func:`traced_once`, a function traced once per program (the contact
   search, the joints, the force elements).
+- :mod:`.fusion`: :func:`computed_once`, values XLA computes once instead of in each
+  kernel that reads them.
 - :mod:`.lru`: the bounded least-recently-used map.
 """
 
@@ -28,9 +30,10 @@ from .compiler import compiler_options as compiler_options
 from .compiler import jit as jit
 from .compiler import persistent_cache_folder as persistent_cache_folder
 from .compiler import use_persistent_cache as use_persistent_cache
+from .fusion import computed_once as computed_once
 from .lru import LruCache as LruCache
 from .tracing import traced_once as traced_once
 
 __all__ = ["CompileTimer", "LruCache", "PROGRAMS_KEPT", "compile_function", "compile_program",
-           "compiler_options", "jit", "kept", "persistent_cache_folder", "traced_once",
-           "use_persistent_cache"]
+           "compiler_options", "computed_once", "jit", "kept", "persistent_cache_folder",
+           "traced_once", "use_persistent_cache"]

@@ -56,6 +56,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from jaxrail._constants import STEEL_POISSON, STEEL_SHEAR_MODULUS
 from jaxrail._float64 import require_float64
+from jaxrail.compilation import computed_once
 from jaxrail.contact._checks import check_range
 from jaxrail.contact.elliptic import agm_kq
 
@@ -274,7 +275,7 @@ def _table_logs(t):
     u, g, h = _asymptotic_logs(far)
     asym = jnp.stack([jnp.sign(t) * u, g, h], axis=-1)
     out = jnp.where(inside[..., None], interp, asym)
-    return out[..., 0], out[..., 1], out[..., 2]
+    return computed_once(out[..., 0], out[..., 1], out[..., 2])
 
 
 def _coefficients_of_t(t, method):

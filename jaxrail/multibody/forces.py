@@ -38,7 +38,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..compilation import traced_once
+from ..compilation import computed_once, traced_once
 from . import quaternion as qt
 from . import anti_roll_bar, friction_damper, table_spring, traction_rod
 from ._values import (checked_axis, checked_vector, element_label, float64_array,
@@ -182,7 +182,7 @@ def _bushing_coords(qi, qj, e):
 
 
 def _bushing_law(s, sdot, e):
-    return e.stiffness * s + e.damping * sdot + e.preload
+    return computed_once(e.stiffness * s + e.damping * sdot + e.preload)
 
 
 def _bushing_potential(s, e):

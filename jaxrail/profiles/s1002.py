@@ -42,6 +42,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._float64 import require_float64
+from ..compilation import computed_once
 from ._base import ClosedFormProfile, WheelProfile
 
 # Section table, mm (profiles.md section 1.2; signs as in the formulas there).
@@ -146,8 +147,8 @@ def piecewise_derivatives_mm(s, joints_ascending, rows):
     root = jnp.sqrt(jnp.where(on_arc, argument, _SQRT_FLOOR))
     arc_slope = jnp.where(on_arc, -offset / root, 0.0)
     arc_second = jnp.where(on_arc, -radius_sq / (root * root * root), 0.0)
-    return (value + weight * root, first + weight * arc_slope,
-            2.0 * second + weight * arc_second)
+    return computed_once(value + weight * root, first + weight * arc_slope,
+                         2.0 * second + weight * arc_second)
 
 
 def height_derivatives_from_mm(derivatives_mm, y):

@@ -36,6 +36,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._float64 import require_float64
+from ..compilation import computed_once
 from ._base import ClosedFormProfile
 
 _MM = 1e-3
@@ -277,7 +278,7 @@ class UIC60(ClosedFormProfile):
         table = self._table()
         index = jnp.sum((y_in > _breaks(table)).astype(jnp.int32))
         h, s, c = _piece_derivatives(jnp, table[index], y_in)
-        return h + s * (y - y_in), s, jnp.where(y == y_in, c, 0.0)
+        return computed_once(h + s * (y - y_in), s, jnp.where(y == y_in, c, 0.0))
 
     def normal_foot(self, eta: Float[ArrayLike, ""], zeta: Float[ArrayLike, ""]) -> Array:
         """The coordinate ``u`` [m] whose normal passes through ``(eta, zeta)`` [m], in

@@ -24,7 +24,7 @@ from jaxtyping import Array, Float
 
 from .._constants import STEEL_POISSON, STEEL_SHEAR_MODULUS
 from .._float64 import f64
-from ..compilation import traced_once
+from ..compilation import computed_once, traced_once
 from ..contact.creepage import creepages
 from ..contact.hertz import hertz_from_curvatures
 from ..contact.normal import Eq17, NormalLaw
@@ -129,7 +129,8 @@ def _patch_laws(params: ContactParameters, active, unit, stiffness, penetration,
     a, b = unit.a * growth, unit.b * growth
     fx, fy = polach(normal_force, params.friction, a, b, xi, eta, phi, params.shear_modulus,
                     params.poisson, parameters=params.polach, rolling_speed=speed)
-    return normal_force, fx, fy, a, b
+    # each read by the force, the moment, the outputs (and the load Jacobian)
+    return computed_once(normal_force, fx, fy, a, b)
 
 
 def _patch_forces(params: ContactParameters, patch, centre, velocity, angular_velocity,

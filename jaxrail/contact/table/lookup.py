@@ -6,7 +6,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ...compilation import traced_once
+from ...compilation import computed_once, traced_once
 from ...track.rails import lateral_from_centre, rail_under_wheel, wheel_origin
 from ..patches import wide_point
 from ..search import ContactPatches, contact_geometry
@@ -71,7 +71,8 @@ def _along_levels(heights, fields, vertical, levels):
     # XLA fuses into every consumer whole (five times the work)
     geometry = tuple(h00 * value[0, :, k] + h10 * span * rate[0, :, k] + h01 * value[1, :, k]
                      + h11 * span * rate[1, :, k] for k in range(value.shape[-1]))
-    return depth, geometry
+    depth, *geometry = computed_once(depth, *geometry)  # read by most of the force laws
+    return depth, tuple(geometry)
 
 
 @traced_once
