@@ -274,8 +274,8 @@ def _table_logs(t):
     far = jnp.where(inside, TABLE_HALF_RANGE + 1.0, jnp.abs(t))
     u, g, h = _asymptotic_logs(far)
     asym = jnp.stack([jnp.sign(t) * u, g, h], axis=-1)
-    out = jnp.where(inside[..., None], interp, asym)
-    return computed_once(out[..., 0], out[..., 1], out[..., 2])
+    out = computed_once(jnp.where(inside[..., None], interp, asym))
+    return out[..., 0], out[..., 1], out[..., 2]
 
 
 def _coefficients_of_t(t, method):
