@@ -6,7 +6,7 @@ columns are the wheelset axes (forward, axle to the left, up) in global componen
 
 import jax.numpy as jnp
 
-from ..track import centreline_position, track_frame
+from ..track import centreline_and_frame
 
 
 def rotation_x(angle):
@@ -41,7 +41,7 @@ def wheelset_pose(track, s, lateral=0.0, vertical=0.46, roll=0.0, yaw=0.0, pitch
 
     Returns ``(position (3,), rotation (3, 3))``.
     """
-    axes = track_frame(track, s)
-    position = centreline_position(track, s) + lateral * axes[:, 1] + vertical * axes[:, 2]
+    centre, axes = centreline_and_frame(track, s)
+    position = centre + lateral * axes[:, 1] + vertical * axes[:, 2]
     rotation = axes @ rotation_z(yaw) @ rotation_x(roll) @ rotation_y(pitch)
     return position, rotation

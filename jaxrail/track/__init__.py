@@ -11,6 +11,7 @@ See docs/track.md.
 """
 
 from .geometry import cant_angle as cant_angle
+from .geometry import centreline_and_frame as centreline_and_frame
 from .geometry import centreline_position as centreline_position
 from .geometry import curvature as curvature
 from .geometry import heading as heading
@@ -41,7 +42,7 @@ from .rails import track_irregularity as track_irregularity
 from .rails import wheel_height as wheel_height
 from .rails import wheel_origin as wheel_origin
 
-__all__ = ["Arc", "FlexibleTrack", "cant_angle", "centreline_position", "CHANNELS", "curvature",
+__all__ = ["Arc", "FlexibleTrack", "cant_angle", "centreline_and_frame", "centreline_position", "CHANNELS", "curvature",
            "curve_layout", "from_track_coordinates", "HALF_TAPING_DISTANCE", "heading",
            "Irregularity", "project", "rail_displacement", "rail_frame", "rail_point",
            "rail_under_wheel", "RAIL_KEYS", "Rails", "STANDARD_GAUGE", "standard_rails", "Straight",

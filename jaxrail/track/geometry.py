@@ -27,7 +27,11 @@ layout is built (the segment starts and the track's coarse samples, for heading
 changes per segment up to about 2 pi), and at a point ``s`` from the nearest coarse
 sample of its segment with 8 (:func:`centreline_position`: at most half a sample
 spacing, over which the heading turns by at most 2 pi / (2 x 8) with the least
-samples a layout takes). Both are within 1e-12 m of the exact integral.
+samples a layout takes). Both are within 1e-12 m of the exact integral. At ``s`` the
+rule rotates by the sample's heading, taking ``cos`` and ``sin`` once, and the nodes'
+small turns from it by their series (:func:`small_angle_cos_sin`): XLA:CPU runs
+``jnp.cos`` and ``jnp.sin`` as a scalar library call per element (about 10 ns each),
+the series in vector multiplications.
 
 Beyond the ends (``s < 0`` or ``s > total length``) the first and last segments are
 **extended by their own law**: a straight end (the usual case) continues as a
@@ -38,11 +42,14 @@ Every function takes a scalar ``s``; use ``jax.vmap`` for arrays. All are pure J
 and jit/vmap/grad-able in ``s`` and in the track's parameters.
 """
 
+import math
 from typing import TYPE_CHECKING
 
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
+
+from ..compilation.fusion import computed_once
 
 
 if TYPE_CHECKING:
@@ -79,6 +86,31 @@ def local_offset(heading0, curvature0, curvature_rate, sigma, nodes=GAUSS_LEGEND
     return half * jnp.sum(w * jnp.cos(h)), half * jnp.sum(w * jnp.sin(h))
 
 
+# Taylor coefficients of cos and sin in x^2 (cos: (-1)^k / (2k)!, sin: (-1)^k / (2k+1)!),
+# highest first for Horner's rule; 9 terms each: truncation under 3e-18 for |x| <= 0.8
+_COS_SERIES = tuple((-1.0) ** k / math.factorial(2 * k) for k in range(8, -1, -1))
+_SIN_SERIES = tuple((-1.0) ** k / math.factorial(2 * k + 1) for k in range(8, -1, -1))
+
+
+def small_angle_cos_sin(angle):
+    """``(cos angle, sin angle)`` by their Taylor series, for ``|angle| <= 0.8`` rad
+    (within an ulp there; the centreline's turn from its nearest sample, at most a
+    sixteenth of a segment's turn, stays below it for segments turning under two
+    revolutions). Plain multiplications, which XLA vectorises; ``jnp.cos`` and
+    ``jnp.sin`` are a scalar library call per element on XLA:CPU."""
+    x2 = angle * angle
+    cos, sin = _COS_SERIES[0], _SIN_SERIES[0]
+    for c, s in zip(_COS_SERIES[1:], _SIN_SERIES[1:]):
+        cos, sin = cos * x2 + c, sin * x2 + s
+    return cos, angle * sin
+
+
+def _rotated(cos_sin, vector):
+    """``vector`` (x, y) turned counter-clockwise by the angle of ``cos_sin``."""
+    (c, s), (x, y) = cos_sin, vector
+    return c * x - s * y, s * x + c * y
+
+
 def _locate(track: "Track", s):
     """Segment index and local distance [m] for scalar arc length ``s`` [m]."""
     s = jnp.asarray(s, dtype=jnp.float64)
@@ -99,21 +131,40 @@ def _heading_and_curvature(track: "Track", s):
     return h, kappa
 
 
-def centreline_position(track: "Track", s: Float[ArrayLike, ""]) -> Float[Array, "3"]:
-    """Centreline point ``(X, Y, 0)`` [m], global frame, at arc length ``s`` [m]:
-    integrated from the nearest coarse sample of its segment (``track.sample_s``,
-    ``sample_xy``: ``k + 1`` per segment, ends included, evenly spaced), so that a
-    short rule suffices (module docstring)."""
+def _from_sample(track: "Track", s):
+    """The centreline at ``s`` [m] from the nearest coarse sample of its segment
+    (``track.sample_s``, ``sample_xy``: ``k + 1`` per segment, ends included, evenly
+    spaced): ``(position (3,), (cos h, sin h))``, ``h`` the heading at ``s``. The
+    offset from the sample is a short Gauss-Legendre rule (module docstring) of the
+    sample's tangent turned by the heading's change from it."""
     i, sigma = _locate(track, s)
     per_segment = track.sample_s.shape[0] // track.n_segments  # k + 1 (static)
     spacing = track.segment_length[i] / (per_segment - 1)
     j = jnp.clip(jnp.round(sigma / spacing), 0, per_segment - 1)
     at = j * spacing  # the sample's local distance [m]
     curvature0, rate = track.curvature_start[i], track.curvature_rate[i]
-    dx, dy = local_offset(local_heading(track.heading_start[i], curvature0, rate, at),
-                          curvature0 + rate * at, rate, sigma - at, nodes=FROM_SAMPLE_NODES)
+    sample_heading = local_heading(track.heading_start[i], curvature0, rate, at)
+    tangent = jnp.cos(sample_heading), jnp.sin(sample_heading)
+    sample_curvature = curvature0 + rate * at
+    u = sigma - at
+    nodes_x, weights = np.polynomial.legendre.leggauss(FROM_SAMPLE_NODES)
+    tau = 0.5 * u * (1.0 + jnp.asarray(nodes_x, dtype=jnp.float64))
+    turn_cos, turn_sin = small_angle_cos_sin(local_heading(0.0, sample_curvature, rate, tau))
+    w = 0.5 * u * jnp.asarray(weights, dtype=jnp.float64)
+    dx, dy = _rotated(tangent, (jnp.sum(w * turn_cos), jnp.sum(w * turn_sin)))
     sample = track.sample_xy[i * per_segment + j.astype(jnp.int32)]
-    return jnp.stack([sample[0] + dx, sample[1] + dy, jnp.zeros_like(dx)])
+    position = jnp.stack([sample[0] + dx, sample[1] + dy, jnp.zeros_like(dx)])
+    cos, sin = _rotated(tangent, small_angle_cos_sin(local_heading(0.0, sample_curvature,
+                                                                    rate, u)))
+    # (cos h, sin h): read by each of the frame's entries
+    return position, computed_once(cos, sin)
+
+
+def centreline_position(track: "Track", s: Float[ArrayLike, ""]) -> Float[Array, "3"]:
+    """Centreline point ``(X, Y, 0)`` [m], global frame, at arc length ``s`` [m]:
+    integrated from the nearest coarse sample of its segment, so that a short rule
+    suffices (module docstring)."""
+    return _from_sample(track, s)[0]
 
 
 def heading(track: "Track", s: Float[ArrayLike, ""]) -> Float[Array, ""]:
@@ -139,10 +190,17 @@ def cant_angle(track: "Track", s: Float[ArrayLike, ""]) -> Float[Array, ""]:
     return jnp.arcsin(superelevation(track, s) / track.rail_centre_distance)
 
 
-def frame_from_angles(heading_angle, cant) -> Float[Array, "3 3"]:
-    """``[t n b]`` (columns) for a heading [rad] and a signed cant angle [rad]."""
-    ch, sh = jnp.cos(heading_angle), jnp.sin(heading_angle)
-    cp, sp = jnp.cos(cant), jnp.sin(cant)
+def _cant_cos_sin(track: "Track", s):
+    """``(cos phi, sin phi)`` of the cant angle at ``s`` [m], without the angle: ``sin
+    phi = e / rail_centre_distance`` (|e| below it, checked by the layout)."""
+    sin = superelevation(track, s) / track.rail_centre_distance
+    return jnp.sqrt(1.0 - sin * sin), sin
+
+
+def frame_from_cos_sin(heading_cos_sin, cant_cos_sin) -> Float[Array, "3 3"]:
+    """``[t n b]`` (columns) from ``(cos, sin)`` of the heading and of the signed cant
+    angle."""
+    (ch, sh), (cp, sp) = heading_cos_sin, cant_cos_sin
     zero = jnp.zeros_like(ch)
     t = jnp.stack([ch, sh, zero])
     n = jnp.stack([-sh * cp, ch * cp, -sp])
@@ -150,12 +208,19 @@ def frame_from_angles(heading_angle, cant) -> Float[Array, "3 3"]:
     return jnp.stack([t, n, b], axis=1)
 
 
+def centreline_and_frame(track: "Track", s: Float[ArrayLike, ""]):
+    """``(centreline point (3,) [m], track frame (3, 3))`` at ``s`` [m]: both of
+    :func:`centreline_position` and :func:`track_frame` from one evaluation."""
+    position, tangent = _from_sample(track, s)
+    return position, frame_from_cos_sin(tangent, _cant_cos_sin(track, s))
+
+
 def track_frame(track: "Track", s: Float[ArrayLike, ""]) -> Float[Array, "3 3"]:
     """Track frame at ``s`` [m]: ``(3, 3)`` matrix, columns ``[t, n, b]`` in global axes.
 
     ``t`` horizontal along the track, ``n`` to the left and ``b`` up, both rolled about
     ``t`` by the cant (``b`` leans toward the inside of the curve)."""
-    return frame_from_angles(heading(track, s), cant_angle(track, s))
+    return centreline_and_frame(track, s)[1]
 
 
 def _side_sign(side) -> Float[Array, ""]:

@@ -32,22 +32,44 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from .geometry import _heading_and_curvature, centreline_position, track_frame
+from .geometry import _from_sample, centreline_and_frame, curvature, local_heading
 
 if TYPE_CHECKING:  # layout imports the rails, which project onto the track
     from .layout import Track
 
 
-def _newton_step(track: "Track", point, s):
-    h, kappa = _heading_and_curvature(track, s)
-    d = point[:2] - centreline_position(track, s)[:2]
-    ch, sh = jnp.cos(h), jnp.sin(h)
+def _newton_update(s, d, tangent, kappa):
+    """One Newton step on ``g(s) = d . t`` from ``s`` [m]: ``d`` (2,) [m] the point from
+    the centreline at ``s``, ``tangent`` ``(cos h, sin h)`` and ``kappa`` [1/m] there."""
+    ch, sh = tangent
     g = d[0] * ch + d[1] * sh
     dg = -1.0 + kappa * (-d[0] * sh + d[1] * ch)
     # g' ~ -1 for points near the track; the cap only guards points near the centre
     # of curvature (|kappa * lateral| -> 1), far outside the intended domain.
     dg = jnp.minimum(dg, -0.1)
     return s - g / dg
+
+
+def _newton_step(track: "Track", point, s):
+    centre, tangent = _from_sample(track, s)
+    return _newton_update(s, point[:2] - centre[:2], tangent, curvature(track, s))
+
+
+def _nearest_sample(track: "Track", point):
+    """Index of the coarse sample nearest ``point`` (horizontal distance)."""
+    return jnp.argmin(jnp.sum((track.sample_xy - point[:2]) ** 2, axis=1))
+
+
+def _step_from_sample(track: "Track", point, k):
+    """:func:`_newton_step` from the coarse sample ``k``, with the sample's stored
+    position, heading and curvature (the centreline's rule from a sample is zero at
+    it)."""
+    i = k // (track.sample_s.shape[0] // track.n_segments)  # the sample's segment
+    at = track.sample_s[k] - track.segment_start[i]
+    curvature0, rate = track.curvature_start[i], track.curvature_rate[i]
+    h = local_heading(track.heading_start[i], curvature0, rate, at)
+    return _newton_update(track.sample_s[k], point[:2] - track.sample_xy[k],
+                          (jnp.cos(h), jnp.sin(h)), curvature0 + rate * at)
 
 
 def _as_point(point) -> Float[Array, "3"]:
@@ -75,14 +97,17 @@ def project(
     Differentiable in ``point`` and the track parameters (implicit derivative).
     """
     p = _as_point(point)
+    track_ng, p_ng = jax.lax.stop_gradient((track, p))
     if s_guess is None:
-        d2 = jnp.sum((track.sample_xy - p[:2]) ** 2, axis=1)
-        s0 = track.sample_s[jnp.argmin(d2)]
+        k = _nearest_sample(track_ng, p_ng)
+        if iterations > 0:  # the first step from the sample's own data
+            s0, iterations = _step_from_sample(track_ng, p_ng, k), iterations - 1
+        else:
+            s0 = track_ng.sample_s[k]
     else:
         s0 = jnp.asarray(s_guess, dtype=jnp.float64)
         if s0.ndim != 0:
             raise ValueError(f"s_guess must be a scalar arc length, got shape {s0.shape}")
-    track_ng, p_ng = jax.lax.stop_gradient((track, p))
     s = jax.lax.fori_loop(
         0, iterations, lambda _, s: _newton_step(track_ng, p_ng, s), jax.lax.stop_gradient(s0)
     )
@@ -99,8 +124,8 @@ def to_track_coordinates(
     """
     p = _as_point(point)
     s = project(track, p, s_guess)
-    frame = track_frame(track, s)
-    d = p - centreline_position(track, s)
+    centre, frame = centreline_and_frame(track, s)
+    d = p - centre
     return s, d @ frame[:, 1], d @ frame[:, 2]
 
 
@@ -112,9 +137,9 @@ def from_track_coordinates(
 ) -> Float[Array, "3"]:
     """Global point [m] at track coordinates: ``centreline(s) + lateral n + vertical b``
     (canted frame at ``s``; ``lateral`` [m] positive left, ``vertical`` [m] up)."""
-    frame = track_frame(track, s)
+    centre, frame = centreline_and_frame(track, s)
     return (
-        centreline_position(track, s)
+        centre
         + jnp.asarray(lateral, dtype=jnp.float64) * frame[:, 1]
         + jnp.asarray(vertical, dtype=jnp.float64) * frame[:, 2]
     )

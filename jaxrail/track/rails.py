@@ -27,7 +27,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from ..profiles import Profile, gauge_point, rail_offset, uic60
-from .geometry import _side_sign, centreline_position, track_frame
+from .geometry import _side_sign, centreline_and_frame
 from .projection import project
 
 HALF_TAPING_DISTANCE = 0.75  # [m] taping lines 1500 mm apart (back-to-back 1360 mm)
@@ -129,10 +129,10 @@ def rail_frame(
     contact search via ``side``).
     """
     sign = _side_sign(side)
-    frame = track_frame(track, s)
+    centre, frame = centreline_and_frame(track, s)
     offset = track.rails.offset
     lateral, vertical = rail_displacement(track, s, sign, deflection)
-    origin = (centreline_position(track, s) + (sign * offset + lateral) * frame[:, 1]
+    origin = (centre + (sign * offset + lateral) * frame[:, 1]
               + vertical * frame[:, 2])
     return origin, frame
 

@@ -182,6 +182,36 @@ def test_integral_from_the_nearest_sample_with_the_fewest_samples():
         T.Track.from_segments([T.Arc(length, radius, "left")], samples_per_segment=7)
 
 
+def test_small_angle_series_against_the_library_cos_and_sin():
+    # |angle| <= 0.8 rad: within an ulp of numpy's cos and sin; jit, vmap and the
+    # derivative (-sin, cos) by forward and reverse mode
+    from jaxrail.track.geometry import small_angle_cos_sin
+    angle = np.linspace(-0.8, 0.8, 2001)
+    cos, sin = jax.jit(jax.vmap(small_angle_cos_sin))(jnp.asarray(angle))
+    np.testing.assert_allclose(cos, np.cos(angle), rtol=0, atol=3e-16)
+    np.testing.assert_allclose(sin, np.sin(angle), rtol=0, atol=3e-16)
+    for a in (0.0, 0.3, -0.75):
+        d_cos, d_sin = jax.jacfwd(small_angle_cos_sin)(jnp.float64(a))
+        np.testing.assert_allclose([d_cos, d_sin], [-np.sin(a), np.cos(a)], atol=1e-15)
+        assert float(jax.grad(lambda x: small_angle_cos_sin(x)[1])(jnp.float64(a))) == \
+            pytest.approx(np.cos(a), abs=1e-15)
+
+
+def test_frame_and_heading_without_angles_match_the_angles():
+    # the frame from the sample's tangent and sin(cant) = e / base against the one
+    # built from heading(s) and cant_angle(s) with the library's cos and sin
+    s = np.linspace(-20.0, TOTAL + 20.0, 397)
+    for track in (LEFT, RIGHT):
+        h = np.asarray(jax.vmap(lambda x: T.heading(track, x))(s))
+        phi = np.asarray(jax.vmap(lambda x: T.cant_angle(track, x))(s))
+        ch, sh, cp, sp = np.cos(h), np.sin(h), np.cos(phi), np.sin(phi)
+        expected = np.stack([np.stack([ch, sh, 0 * ch], 1),
+                             np.stack([-sh * cp, ch * cp, -sp], 1),
+                             np.stack([-sh * sp, ch * sp, cp], 1)], 2)
+        frames = np.asarray(jax.jit(jax.vmap(lambda x: T.track_frame(track, x)))(s))
+        np.testing.assert_allclose(frames, expected, rtol=0, atol=2e-15)
+
+
 def clothoid_reference(sigma, radius, length):
     """Clothoid from the origin, heading 0, curvature sigma / (radius * length)."""
     a = np.sqrt(radius * length * np.pi)
