@@ -42,8 +42,9 @@ from .rails import track_irregularity as track_irregularity
 from .rails import wheel_height as wheel_height
 from .rails import wheel_origin as wheel_origin
 
-__all__ = ["Arc", "FlexibleTrack", "cant_angle", "centreline_and_frame", "centreline_position", "CHANNELS", "curvature",
-           "curve_layout", "from_track_coordinates", "HALF_TAPING_DISTANCE", "heading",
+__all__ = ["Arc", "FlexibleTrack", "cant_angle", "centreline_and_frame", "centreline_position",
+           "CHANNELS", "curvature", "curve_layout", "from_track_coordinates",
+           "HALF_TAPING_DISTANCE", "heading",
            "Irregularity", "project", "rail_displacement", "rail_frame", "rail_point",
            "rail_under_wheel", "RAIL_KEYS", "Rails", "STANDARD_GAUGE", "standard_rails", "Straight",
            "straight_track", "superelevation", "to_track_coordinates", "Track", "track_frame",

@@ -32,7 +32,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from .geometry import _from_sample, centreline_and_frame, curvature, local_heading
+from .geometry import _from_sample, _heading_and_curvature, centreline_and_frame, curvature
 
 if TYPE_CHECKING:  # layout imports the rails, which project onto the track
     from .layout import Track
@@ -62,14 +62,10 @@ def _nearest_sample(track: "Track", point):
 
 def _step_from_sample(track: "Track", point, k):
     """:func:`_newton_step` from the coarse sample ``k``, with the sample's stored
-    position, heading and curvature (the centreline's rule from a sample is zero at
-    it)."""
-    i = k // (track.sample_s.shape[0] // track.n_segments)  # the sample's segment
-    at = track.sample_s[k] - track.segment_start[i]
-    curvature0, rate = track.curvature_start[i], track.curvature_rate[i]
-    h = local_heading(track.heading_start[i], curvature0, rate, at)
-    return _newton_update(track.sample_s[k], point[:2] - track.sample_xy[k],
-                          (jnp.cos(h), jnp.sin(h)), curvature0 + rate * at)
+    position (the centreline's rule from a sample is zero at it)."""
+    s = track.sample_s[k]
+    h, kappa = _heading_and_curvature(track, s)
+    return _newton_update(s, point[:2] - track.sample_xy[k], (jnp.cos(h), jnp.sin(h)), kappa)
 
 
 def _as_point(point) -> Float[Array, "3"]:
