@@ -91,10 +91,15 @@ def test_two_processes_give_the_one_process_table(tmp_path):
     assert "wrote" in first and "wrote" not in second  # process 0 writes, once
     two, one = _rows(tmp_path / "two" / "table.csv"), _rows(tmp_path / "one" / "table.csv")
     assert len(two) == len(one) == 4 and two[0].keys() == one[0].keys()
+    # The two processes integrate 2 samples each, the one process 4 together: XLA's
+    # programs for the two batch sizes round differently, and the stiff contact turns
+    # positions equal to 1e-12 m into forces that differ by up to 3e-7 relative (the
+    # same 4 samples in one process in chunks of 4 and of 2, on 2026-12-01). Rows out of
+    # place or results gathered wrongly differ by more than 10 % (speed 8 to 12 m/s).
     for key in one[0]:
         a, b = [r[key] for r in one], [r[key] for r in two]
         try:
-            np.testing.assert_allclose(np.array(b, float), np.array(a, float), rtol=1e-8,
+            np.testing.assert_allclose(np.array(b, float), np.array(a, float), rtol=1e-6,
                                        atol=1e-12, err_msg=key)
         except ValueError:  # a text column
             assert a == b, key
