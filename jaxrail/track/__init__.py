@@ -27,6 +27,7 @@ from .layout import curve_layout as curve_layout
 from .layout import straight_track as straight_track
 from .projection import from_track_coordinates as from_track_coordinates
 from .projection import project as project
+from .projection import project_onto_centreline as project_onto_centreline
 from .projection import to_track_coordinates as to_track_coordinates
 from .flexible import FlexibleTrack as FlexibleTrack
 from .rails import HALF_TAPING_DISTANCE as HALF_TAPING_DISTANCE
@@ -44,8 +45,8 @@ from .rails import wheel_origin as wheel_origin
 
 __all__ = ["Arc", "FlexibleTrack", "cant_angle", "centreline_and_frame", "centreline_position",
            "CHANNELS", "curvature", "curve_layout", "from_track_coordinates",
-           "HALF_TAPING_DISTANCE", "heading",
-           "Irregularity", "project", "rail_displacement", "rail_frame", "rail_point",
-           "rail_under_wheel", "RAIL_KEYS", "Rails", "STANDARD_GAUGE", "standard_rails", "Straight",
-           "straight_track", "superelevation", "to_track_coordinates", "Track", "track_frame",
-           "track_irregularity", "Transition", "wheel_height", "wheel_origin"]
+           "HALF_TAPING_DISTANCE", "heading", "Irregularity", "project",
+           "project_onto_centreline", "rail_displacement", "rail_frame", "rail_point",
+           "rail_under_wheel", "RAIL_KEYS", "Rails", "STANDARD_GAUGE", "standard_rails",
+           "Straight", "straight_track", "superelevation", "to_track_coordinates", "Track",
+           "track_frame", "track_irregularity", "Transition", "wheel_height", "wheel_origin"]

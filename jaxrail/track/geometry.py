@@ -28,10 +28,10 @@ changes per segment up to about 2 pi), and at a point ``s`` from the nearest coa
 sample of its segment with 8 (:func:`centreline_position`: at most half a sample
 spacing, over which the heading turns by at most 2 pi / (2 x 8) with the least
 samples a layout takes). Both are within 1e-12 m of the exact integral. At ``s`` the
-rule rotates by the sample's heading, taking ``cos`` and ``sin`` once, and the nodes'
-small turns from it by their series (:func:`small_angle_cos_sin`): XLA:CPU runs
-``jnp.cos`` and ``jnp.sin`` as a scalar library call per element (about 10 ns each),
-the series in vector multiplications.
+rule rotates by the sample's tangent (``track.sample_tangent``: its ``cos`` and ``sin``
+taken where the layout is built) and the nodes' small turns from it by their series
+(:func:`small_angle_cos_sin`): XLA:CPU runs ``jnp.cos`` and ``jnp.sin`` as a scalar
+library call per element (about 10 ns each), the series in vector multiplications.
 
 Beyond the ends (``s < 0`` or ``s > total length``) the first and last segments are
 **extended by their own law**: a straight end (the usual case) continues as a
@@ -133,18 +133,18 @@ def _heading_and_curvature(track: "Track", s):
 
 def _from_sample(track: "Track", s):
     """The centreline at ``s`` [m] from the nearest coarse sample of its segment
-    (``track.sample_s``, ``sample_xy``: ``k + 1`` per segment, ends included, evenly
-    spaced): ``(position (3,), (cos h, sin h))``, ``h`` the heading at ``s``. The
-    offset from the sample is a short Gauss-Legendre rule (module docstring) of the
-    sample's tangent turned by the heading's change from it."""
+    (``track.sample_s``, ``sample_xy``, ``sample_tangent``: ``k + 1`` per segment, ends
+    included, evenly spaced): ``(position (3,), (cos h, sin h))``, ``h`` the heading at
+    ``s``. The offset from the sample is a short Gauss-Legendre rule (module docstring)
+    of the sample's tangent turned by the heading's change from it."""
     i, sigma = _locate(track, s)
     per_segment = track.sample_s.shape[0] // track.n_segments  # k + 1 (static)
     spacing = track.segment_length[i] / (per_segment - 1)
     j = jnp.clip(jnp.round(sigma / spacing), 0, per_segment - 1)
     at = j * spacing  # the sample's local distance [m]
     curvature0, rate = track.curvature_start[i], track.curvature_rate[i]
-    sample_heading = local_heading(track.heading_start[i], curvature0, rate, at)
-    tangent = jnp.cos(sample_heading), jnp.sin(sample_heading)
+    k = i * per_segment + j.astype(jnp.int32)
+    tangent = track.sample_tangent[k, 0], track.sample_tangent[k, 1]
     sample_curvature = curvature0 + rate * at
     u = sigma - at
     nodes_x, weights = np.polynomial.legendre.leggauss(FROM_SAMPLE_NODES)
@@ -152,7 +152,7 @@ def _from_sample(track: "Track", s):
     turn_cos, turn_sin = small_angle_cos_sin(local_heading(0.0, sample_curvature, rate, tau))
     w = 0.5 * u * jnp.asarray(weights, dtype=jnp.float64)
     dx, dy = _rotated(tangent, (jnp.sum(w * turn_cos), jnp.sum(w * turn_sin)))
-    sample = track.sample_xy[i * per_segment + j.astype(jnp.int32)]
+    sample = track.sample_xy[k]
     position = jnp.stack([sample[0] + dx, sample[1] + dy, jnp.zeros_like(dx)])
     cos, sin = _rotated(tangent, small_angle_cos_sin(local_heading(0.0, sample_curvature,
                                                                     rate, u)))

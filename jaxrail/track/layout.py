@@ -85,8 +85,10 @@ class Track(eqx.Module):
         superelevation_rate: d superelevation / d s [-].
         rail_centre_distance: lateral distance between rail centres [m] over which the
             cant is measured (scalar).
-        sample_s, sample_xy: coarse centreline samples for the projection's initial
-            guess, ``(m,)`` [m] and ``(m, 2)`` [m]; ``m`` is static.
+        sample_s, sample_xy, sample_tangent: coarse centreline samples for the
+            projection's initial guess and the centreline's rule from a sample,
+            ``(m,)`` [m], ``(m, 2)`` [m] and ``(m, 2)`` the tangent ``(cos h, sin h)``
+            there; ``m`` is static.
         rails: the track's :class:`~jaxrail.track.rails.Rails` (their profile and the
             offset that sets the gauge; :meth:`with_rails`), UIC60 1:40 at 1.435 m
             unless given (:func:`~jaxrail.track.rails.standard_rails`).
@@ -111,6 +113,7 @@ class Track(eqx.Module):
     rail_centre_distance: Float[Array, ""]
     sample_s: Float[Array, " m"]
     sample_xy: Float[Array, "m 2"]
+    sample_tangent: Float[Array, "m 2"]
     rails: Rails
     kinds: tuple[str, ...] = eqx.field(static=True)
     irregularity: Irregularity | None = None
@@ -243,6 +246,10 @@ def _assemble(lengths, radii, cants, start, kinds, signs, samples_per_segment):
     sample_xy = jnp.stack(
         [(x_start[:, None] + sx).reshape(-1), (y_start[:, None] + sy).reshape(-1)], axis=1
     )
+    # once here, so that no evaluation of the centreline calls cos and sin
+    sample_heading = local_heading(h_start[:, None], k0[:, None], k_rate[:, None], sigma)
+    sample_tangent = jnp.stack([jnp.cos(sample_heading).reshape(-1),
+                                jnp.sin(sample_heading).reshape(-1)], axis=1)
     return dict(
         segment_start=seg_start,
         segment_length=lengths,
@@ -255,6 +262,7 @@ def _assemble(lengths, radii, cants, start, kinds, signs, samples_per_segment):
         superelevation_rate=e_rate,
         sample_s=(seg_start[:, None] + sigma).reshape(-1),
         sample_xy=sample_xy,
+        sample_tangent=sample_tangent,
     )
 
 

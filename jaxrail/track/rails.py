@@ -27,8 +27,8 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from ..profiles import Profile, gauge_point, rail_offset, uic60
-from .geometry import _side_sign, centreline_and_frame
-from .projection import project
+from .geometry import _cant_cos_sin, _side_sign, centreline_and_frame, frame_from_cos_sin
+from .projection import project_onto_centreline
 
 HALF_TAPING_DISTANCE = 0.75  # [m] taping lines 1500 mm apart (back-to-back 1360 mm)
 STANDARD_GAUGE = 1.435  # [m]
@@ -128,8 +128,13 @@ def rail_frame(
     is applied to profile coordinates by :func:`jaxrail.track.rail_point` and by the
     contact search via ``side``).
     """
+    return _rail_on_centreline(track, s, *centreline_and_frame(track, s), side, deflection)
+
+
+def _rail_on_centreline(track, s, centre, frame, side, deflection=None):
+    """:func:`rail_frame` from the centreline point ``centre`` (3,) [m] and track frame
+    ``frame`` (3, 3) at ``s`` [m]."""
     sign = _side_sign(side)
-    centre, frame = centreline_and_frame(track, s)
     offset = track.rails.offset
     lateral, vertical = rail_displacement(track, s, sign, deflection)
     origin = (centre + (sign * offset + lateral) * frame[:, 1]
@@ -176,8 +181,9 @@ def rail_under_wheel(track, origin, side, s_guess=None, deflection=None):
     the wheel origin) and the rail's frame there (:func:`rail_frame`), the rail moved by
     its irregularity and, on a flexible track, by ``deflection`` (2,) [m] (lateral,
     vertical) under this wheel."""
-    s_rail = project(track, origin, s_guess)
-    rail_origin, rail_axes = rail_frame(track, s_rail, side, deflection)
+    s_rail, centre, tangent = project_onto_centreline(track, origin, s_guess)
+    frame = frame_from_cos_sin(tangent, _cant_cos_sin(track, s_rail))
+    rail_origin, rail_axes = _rail_on_centreline(track, s_rail, centre, frame, side, deflection)
     return s_rail, rail_origin, rail_axes
 
 

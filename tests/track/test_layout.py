@@ -52,6 +52,9 @@ def test_curve_track_arrays():
     np.testing.assert_allclose(track.sample_xy[::17, 0], track.x_start)
     np.testing.assert_allclose(track.sample_xy[::17, 1], track.y_start)
     np.testing.assert_allclose(track.sample_s[-1], track.total_length)
+    heading = jax.vmap(lambda s: T.heading(track, s))(track.sample_s)
+    np.testing.assert_allclose(track.sample_tangent,
+                               np.stack([np.cos(heading), np.sin(heading)], 1), rtol=0, atol=1e-15)
 
 
 def test_right_curve_has_negative_curvature_and_cant():

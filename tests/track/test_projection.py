@@ -179,3 +179,51 @@ def test_grad_wrt_radius_through_projection():
     fd = (values[0] - values[1]) / (2 * h)
     assert float(grads[2]) == pytest.approx(float(fd), rel=1e-6)
     assert abs(float(fd)) > 1e-3
+
+
+def _carried_and_evaluated(track, p):
+    s, centre, (ch, sh) = T.project_onto_centreline(track, p)
+    return (s, centre, jnp.stack([ch, sh]), T.centreline_position(track, s),
+            T.track_frame(track, s)[:2, 0])
+
+
+_carried_v = jax.jit(jax.vmap(_carried_and_evaluated, (None, 0)))
+
+
+@pytest.mark.parametrize("track", [LEFT, RIGHT], ids=["left", "right"])
+def test_the_centreline_carried_by_the_last_step_is_the_one_at_s(track):
+    # the last Newton step's centreline, moved to first order by the step, against a
+    # new evaluation at the projected s (round trips place the points)
+    s, lat, vert = sample_points(TOTAL, k=N // 2)
+    points = round_trip(track, s, lat, vert)[0]
+    out = [np.asarray(o[:len(s)]) for o in _carried_v(track, pad(points))]
+    _, carried, tangent, centre, evaluated = out
+    np.testing.assert_allclose(carried, centre, rtol=0, atol=2e-13)
+    np.testing.assert_allclose(tangent, evaluated, rtol=0, atol=2e-15)
+
+
+def _rail_origin_height(track, p):
+    """The rail section's origin under p, by the carried centreline and by a new
+    evaluation of the rail frame at its s, dotted with a fixed vector."""
+    s, origin, axes = T.rail_under_wheel(track, p, 1.0)
+    direct = T.rail_frame(track, s, 1.0)
+    weights = jnp.array([0.3, 0.5, 0.7])
+    return jnp.stack([origin @ weights, direct[0] @ weights, axes[:, 2] @ weights,
+                      direct[1][:, 2] @ weights])
+
+
+def test_rail_under_wheel_matches_the_rail_frame_at_its_section_with_gradients():
+    p = np.asarray(round_trip(LEFT, np.array([LS + LT + 60.0]), np.array([0.75]),
+                              np.array([0.1]))[0][0])
+    values = np.asarray(jax.jit(_rail_origin_height)(LEFT, p))
+    np.testing.assert_allclose(values[0], values[1], rtol=0, atol=1e-13)
+    np.testing.assert_allclose(values[2], values[3], rtol=0, atol=1e-15)
+    reverse = np.asarray(jax.jit(jax.jacrev(_rail_origin_height, 1))(LEFT, p))
+    forward = np.asarray(jax.jit(jax.jacfwd(_rail_origin_height, 1))(LEFT, p))
+    h = 1e-5
+    central = np.stack([(np.asarray(_rail_origin_height(LEFT, p + h * e))
+                         - np.asarray(_rail_origin_height(LEFT, p - h * e))) / (2 * h)
+                        for e in np.eye(3)], axis=1)
+    np.testing.assert_allclose(forward, reverse, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(reverse, central, rtol=0, atol=1e-5)
+    np.testing.assert_allclose(reverse[0], reverse[1], rtol=0, atol=1e-12)
