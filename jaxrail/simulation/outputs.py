@@ -29,7 +29,7 @@ def wheelset_track_coordinates(vehicle, params, track, q, qdot, deflection=None)
         yaw = -jnp.arctan2(axle[0], axle[1])
         irregularity = track_irregularity(track, s)
         wheel_heights = jax.vmap(
-            lambda side, d: wheel_height(track, r, a, side, d),
+            lambda side, d: wheel_height(track, r, a, side, d, s),
             in_axes=(0, None if w is None else 0))(sides, w)
         return lateral, vertical, yaw, wheel_heights, irregularity
     return jax.vmap(one, in_axes=(0, 0, None if deflection is None else 0))(

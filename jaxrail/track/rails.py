@@ -174,14 +174,15 @@ def rail_point(
     return origin + frame @ local
 
 
-def rail_under_wheel(track, origin, side, s_guess=None, deflection=None):
+def rail_under_wheel(track, origin, side, s_guess=None, deflection=None, iterations=2):
     """The rail section under a wheel whose profile origin is ``origin`` (3,) [m]
     (:func:`wheel_origin`): ``(s_rail, rail_origin (3,), rail_axes (3, 3))``, the
     section's arc length [m] (eqs. 3-5: the design centreline's normal plane through
     the wheel origin) and the rail's frame there (:func:`rail_frame`), the rail moved by
     its irregularity and, on a flexible track, by ``deflection`` (2,) [m] (lateral,
-    vertical) under this wheel."""
-    s_rail, centre, tangent = project_onto_centreline(track, origin, s_guess)
+    vertical) under this wheel; ``s_guess`` and ``iterations``: as
+    :func:`~jaxrail.track.projection.project_onto_centreline`'s."""
+    s_rail, centre, tangent = project_onto_centreline(track, origin, s_guess, iterations)
     frame = frame_from_cos_sin(tangent, _cant_cos_sin(track, s_rail))
     rail_origin, rail_axes = _rail_on_centreline(track, s_rail, centre, frame, side, deflection)
     return s_rail, rail_origin, rail_axes
@@ -196,12 +197,19 @@ def lateral_from_centre(track, s, side, y_rail, deflection=None):
             + rail_displacement(track, s, side, deflection)[0])
 
 
-def wheel_height(track, wheelset_position, wheelset_rotation, side, deflection=None):
+def wheel_height(track, wheelset_position, wheelset_rotation, side, deflection=None,
+                 s_guess=None):
     """Height [m] of the ``side`` wheel's profile origin (:func:`wheel_origin`) over its
     rail's profile origin, along the rail's ``b`` (:func:`rail_under_wheel`: with the
-    rail's irregularity and ``deflection`` (2,) [m])."""
+    rail's irregularity and ``deflection`` (2,) [m]). ``s_guess`` [m]: the wheelset's
+    arc length, from which one Newton step and the last reach the wheel's section (the
+    wheel is at most centimetres along the track from the wheelset's centre: the last
+    step moves it by well under 1e-6 m, ``tests/track/test_rails.py``); None: from
+    the nearest sample (:func:`~jaxrail.track.projection.project_onto_centreline`)."""
     origin = wheel_origin(wheelset_position, wheelset_rotation, side)
-    _, rail_origin, rail_axes = rail_under_wheel(track, origin, side, deflection=deflection)
+    iterations = 2 if s_guess is None else 1
+    _, rail_origin, rail_axes = rail_under_wheel(track, origin, side, s_guess, deflection,
+                                                 iterations)
     return (origin - rail_origin) @ rail_axes[:, 2]
 
 

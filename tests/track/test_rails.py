@@ -57,3 +57,49 @@ def test_every_track_has_the_standard_rails_unless_given():
     assert float(wide.rails.offset) == pytest.approx(float(rails.offset) + 0.005, abs=1e-15)
     with pytest.raises(TypeError, match="rails must be Rails"):
         straight_track(10.0).with_rails(OFFSET)
+
+
+def test_a_wheel_height_from_its_wheelsets_arc_length_is_the_one_from_the_nearest_sample():
+    """The stop event's and outputs' wheel heights start the projection at the wheelset's
+    arc length (one Newton step and the last): on a canted curve with transitions, for
+    wheelsets yawed up to 50 mrad and 30 mm off the centre line (in the straights, the
+    transitions and the arc, at the joints and beyond the ends), the heights and their
+    derivatives by the wheelset's position are those from the nearest sample."""
+    import jax
+    import jax.numpy as jnp
+
+    from jaxrail.track import (Track, centreline_position, curve_layout, to_track_coordinates,
+                               track_frame)
+
+    track = Track.from_segments(curve_layout(300.0, "left", 0.15, 50.0, 80.0, 200.0, 50.0))
+    rng = np.random.default_rng(3)
+    s = np.concatenate([[-5.0, 0.0, 50.0, 130.0, 330.0, 410.0, 465.0],
+                        rng.uniform(0.0, 460.0, 25)])
+    lateral, yaw = rng.uniform(-0.03, 0.03, s.size), rng.uniform(-0.05, 0.05, s.size)
+    yaw[:4] = [0.05, -0.05, 0.05, -0.05]
+
+    def heights(s, lateral, yaw, side):
+        frame = track_frame(track, s)
+        turn = jnp.array([[jnp.cos(yaw), -jnp.sin(yaw), 0.0], [jnp.sin(yaw), jnp.cos(yaw), 0.0],
+                          [0.0, 0.0, 1.0]])
+        rotation = frame @ turn
+        position = centreline_position(track, s) + lateral * frame[:, 1] + 0.45 * frame[:, 2]
+
+        def both(position):
+            s_wheelset = to_track_coordinates(track, position)[0]  # as the outputs
+            return jnp.stack([wheel_height(track, position, rotation, side),
+                              wheel_height(track, position, rotation, side,
+                                           s_guess=s_wheelset)])
+        return both(position), jax.jacfwd(both)(position), jax.jacrev(both)(position)
+
+    for side in (1.0, -1.0):
+        value, forward, reverse = jax.jit(jax.vmap(lambda *a: heights(*a, side)))(s, lateral,
+                                                                                  yaw)
+        value, forward, reverse = np.asarray(value), np.asarray(forward), np.asarray(reverse)
+        assert np.all(np.abs(value[:, 0] - 0.45) < 0.05)  # the wheels near their rails
+        np.testing.assert_allclose(value[:, 1], value[:, 0], rtol=0, atol=1e-12)
+        # the derivatives within kappa x the last step (under 1e-7 m from the wheelset's
+        # arc length, under 1e-12 m from the sample) of the carried centreline's
+        np.testing.assert_allclose(forward[:, 1], forward[:, 0], rtol=0, atol=1e-11)
+        np.testing.assert_allclose(reverse[:, 1], reverse[:, 0], rtol=0, atol=1e-11)
+
