@@ -32,7 +32,10 @@ outside a loop; several times slower for these small programs):
 - ``element_operations``: the work inside those operations, per looped program
   (:func:`jaxrail._hlo_operations.element_counts`: the elements the optimised HLO's
   instructions write, fused or not: ``arithmetic``, ``data_movement`` that writes
-  memory and ``remapped_in_fusions``, each inner loop's body once), and ``elements_by_kind`` of the right-hand side (the 15 largest).
+  memory and ``remapped_in_fusions``, each inner loop's body once), and ``elements_by_kind`` of the right-hand side (the 15 largest);
+- ``arithmetic_by_source``: the right-hand side's arithmetic element operations by the
+  jaxrail file and function that traced them (:func:`jaxrail._hlo_operations.arithmetic_by_source`,
+  the 20 largest; ``unattributed`` where XLA dropped an instruction's metadata).
 
 With ``--kernels``, per contact model the kernels of the right-hand side's and the IMEX
 step's loops as XLA:CPU runs them (:func:`jaxrail._kernel_profile.kernel_profile`: each
@@ -69,7 +72,7 @@ import jax.numpy as jnp
 
 from jaxrail import enable_float64
 from jaxrail.compilation import compiler_options
-from jaxrail._hlo_operations import element_counts, operation_counts
+from jaxrail._hlo_operations import arithmetic_by_source, element_counts, operation_counts
 from jaxrail._kernel_profile import TRACE_FLAG, kernel_profile, tracing_enabled
 
 enable_float64()
@@ -245,6 +248,7 @@ def profile_model(model, vehicle, params, track, q, qdot, rails, calls, batch, k
                                                                "remapped_in_fusions")}
                                for name, value in looped.items()},
         "elements_by_kind": dict(list(looped["rhs"][2]["by_kind"].items())[:15]),
+        "arithmetic_by_source": dict(list(arithmetic_by_source(looped["rhs"][3]).items())[:20]),
     }
     if kernels:
         out["kernels"] = {name: kernels_in_loop(looped[name][3], args, min(calls, KERNEL_CALLS))

@@ -56,3 +56,25 @@ def test_element_operations_against_hand_counts():
     work = _elements(lambda x: (jnp.sin(x).T @ x, x.sum(0)), a)
     assert work["by_kind"]["dot"] == 48 and work["by_kind"]["reduce"] == 12
     assert work["by_kind"]["sine"] == 12
+
+
+def _scaled_sines(x):
+    return jnp.sin(x) * 2.0
+
+
+def test_arithmetic_is_attributed_to_the_function_that_traced_it():
+    """The sine and the product of :func:`_scaled_sines` (16 each on an 8-vector) are
+    this file's, by the innermost frame inside its directory; the sum of the two
+    vectors, made in the lambda below, is the lambda's; nothing is left over."""
+    import pathlib
+
+    from jaxrail._hlo_operations import arithmetic_by_source
+
+    here = pathlib.Path(__file__).resolve()
+    compiled = jax.jit(lambda x, y: _scaled_sines(x) + y).lower(jnp.ones(8), jnp.ones(8)).compile()
+    counts = arithmetic_by_source(compiled, root=here.parent)
+    assert counts == {f"{here.name}:_scaled_sines": 16,
+                      f"{here.name}:test_arithmetic_is_attributed_to_the_function_that_"
+                      "traced_it.<locals>.<lambda>": 8}
+    assert sum(counts.values()) == element_counts(compiled)["arithmetic"]
+    assert arithmetic_by_source(compiled) == {"unattributed": 24}  # no jaxrail frame
