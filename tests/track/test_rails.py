@@ -102,4 +102,3 @@ def test_a_wheel_height_from_its_wheelsets_arc_length_is_the_one_from_the_neares
         # arc length, under 1e-12 m from the sample) of the carried centreline's
         np.testing.assert_allclose(forward[:, 1], forward[:, 0], rtol=0, atol=1e-11)
         np.testing.assert_allclose(reverse[:, 1], reverse[:, 0], rtol=0, atol=1e-11)
-
