@@ -7,6 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ...compilation import computed_once, traced_once
+from ...compilation.windows import window_map
 from ...track.rails import lateral_from_centre, rail_under_wheel, wheel_origin
 from ..patches import wide_point
 from ..search import ContactPatches, contact_geometry
@@ -34,6 +35,21 @@ def relative_pose(track, radius, wheelset_position, wheelset_rotation, side, def
     yaw = jnp.arctan2(-local[0], local[1])
     return (taping @ rail_axes[:, 1], taping @ rail_axes[:, 2], yaw, roll, s_rail, rail_origin,
             rail_axes, origin, frame)
+
+
+def _weighted_nodes(window, weight):
+    """(A,): the heights' window (1, *block, A) summed over the block's nodes with
+    their weights (N,)."""
+    return weight @ window.reshape(-1, window.shape[-1])
+
+
+def _weighted_levels(window, weight):
+    """(2, slots x fields): the coefficients' window (1, 2, *block, slots x fields), the
+    block at two approach levels, summed over the nodes with their weights (N,) level
+    by level: a matrix-vector product per level that reads the window as stored (no
+    transpose)."""
+    block = window.reshape(2, weight.shape[0], -1)
+    return jnp.einsum("ln,lnf->lf", jnp.broadcast_to(weight, (2, weight.shape[0])), block)
 
 
 def _two_levels(heights, vertical):
@@ -92,16 +108,12 @@ def table_patches(table: ContactTable, wheel, track, wheelset_position, wheelset
     slots, count = len(table.surfaces), table.shape[4]
     starts, size, weight = _pose_weights(table, lateral, yaw, roll)
     zero = jnp.zeros((), jnp.int32)
-    heights = weight @ jax.lax.dynamic_slice(
-        table.heights, (side_index, *starts, zero), (1, *size, count)).reshape(-1, count)
+    heights = window_map(_weighted_nodes, table.heights, (side_index, *starts, zero),
+                         (1, *size, count), weight)
     two = _two_levels(heights, vertical)
-    # the block at the two levels as one window, (level, node, slot field) as stored,
-    # so that the weighted sum over the nodes is a matrix-vector product per level
-    # that reads the window as it is (no transpose of the window)
-    block = jax.lax.dynamic_slice(table.rows, (side_index, two[0], *starts, zero),
-                                  (1, 2, *size, table.rows.shape[-1])).reshape(2, len(weight), -1)
-    weights = jnp.broadcast_to(weight, (2, len(weight)))
-    fields = jnp.einsum("ln,lnf->lf", weights, block).reshape(2, slots, len(FIELDS))
+    fields = window_map(_weighted_levels, table.rows, (side_index, two[0], *starts, zero),
+                        (1, 2, *size, table.rows.shape[-1]), weight)
+    fields = fields.reshape(2, slots, len(FIELDS))
     depth, interpolated = _along_levels(heights[two], fields, vertical,
                                         jnp.asarray(table.grid.levels)[two])
     y_deepest, centre, breadth, rail_from_wheel, curvature = interpolated
