@@ -18,6 +18,8 @@ nonlinear stability search (:mod:`jaxrail.stability.nonlinear`) and identificati
   search, the joints, the force elements).
 - :mod:`.fusion`: :func:`computed_once`, values XLA computes once instead of in each
   kernel that reads them.
+- :mod:`.windows`: ``window_map``, a linear map of a table's window at run-time indices,
+  one slice per member of a small ``vmap`` instead of a gather.
 - :mod:`.lru`: the bounded least-recently-used map.
 """
 
