@@ -2,8 +2,8 @@
 
 Under ``vmap`` a dynamic slice becomes a gather, and XLA:CPU's gather fetches element
 by element with its index arithmetic: the contact table's windows (15 552 coefficients
-for the trailer's 8 wheels) took about a third of the table-mode right-hand side
-(docs/design.md section 8). Stacking separate slices does not help: XLA fuses the
+for the trailer's 8 wheels) were the table-mode right-hand side's two largest kernels,
+16 % of its traced time (docs/simulation.md, "The table's windows without a gather"). Stacking separate slices does not help: XLA fuses the
 stack with the slices into one loop that picks its source element by element.
 
 :func:`window_map` computes ``fn(lax.dynamic_slice(operand, starts, sizes), *args)``
@@ -48,10 +48,10 @@ def _window_map(fn, sizes):
         if in_batched[0] or axis_size > UNROLLED:
             axes = tuple(0 if b else None for b in in_batched)
             return jax.vmap(plain, in_axes=axes)(operand, starts, *args), True
-        member = [lambda i, x=x, b=b: x[i] if b else x
-                  for x, b in zip((starts, *args), in_batched[1:])]
-        return jnp.stack([unrolled(operand, *(m(i) for m in member))
-                          for i in range(axis_size)]), True
+        def member(i):  # the i-th member's starts and args
+            return [x[i] if b else x for x, b in zip((starts, *args), in_batched[1:])]
+
+        return jnp.stack([unrolled(operand, *member(i)) for i in range(axis_size)]), True
 
     def jvp(primals, tangents):
         operand, starts, *args = primals
