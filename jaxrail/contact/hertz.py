@@ -57,6 +57,7 @@ from jaxtyping import Array, ArrayLike, Float
 from jaxrail._constants import STEEL_POISSON, STEEL_SHEAR_MODULUS
 from jaxrail._float64 import require_float64
 from jaxrail.compilation import computed_once
+from jaxrail.compilation.seldom import seldom
 from jaxrail.contact._checks import check_range
 from jaxrail.contact.elliptic import agm_kq
 
@@ -257,8 +258,17 @@ def _asymptotic_logs(t_abs):
     return u, log_m - 0.5 * u, jnp.log((2.0 / math.pi) * k) - log_m
 
 
+def _asymptote_row(t):
+    """(w, g, h) (3,) by the asymptote at one t = log(B/A) beyond the table."""
+    far = jnp.maximum(jnp.abs(t), TABLE_HALF_RANGE)
+    u, g, h = _asymptotic_logs(far)
+    return jnp.stack([jnp.sign(t) * u, g, h])
+
+
 def _table_logs(t):
-    """(w, g, h) at t = log(B/A) (any shape) from the Hermite table or the asymptote."""
+    """(w, g, h) at t = log(B/A) (any shape) from the Hermite table or, beyond it (never
+    in a vehicle: B/A above 8e13), the asymptote, computed only where some element of
+    the batch needs it (:func:`jaxrail.compilation.seldom.seldom`)."""
     table = jnp.asarray(_table())
     inside = jnp.abs(t) <= TABLE_HALF_RANGE
     # Each branch sees t moved into its own range (by `where`, so the unused branch and
@@ -271,9 +281,7 @@ def _table_logs(t):
     f1, d1 = ends[..., 1, :3], ends[..., 1, 3:] * _TABLE_STEP
     r = 1.0 - s
     interp = r * r * ((1.0 + 2.0 * s) * f0 + s * d0) + s * s * ((3.0 - 2.0 * s) * f1 - r * d1)
-    far = jnp.where(inside, TABLE_HALF_RANGE + 1.0, jnp.abs(t))
-    u, g, h = _asymptotic_logs(far)
-    asym = jnp.stack([jnp.sign(t) * u, g, h], axis=-1)
+    asym = seldom(_asymptote_row, ~inside, t)
     out = computed_once(jnp.where(inside[..., None], interp, asym))
     return out[..., 0], out[..., 1], out[..., 2]
 
@@ -306,7 +314,7 @@ def hertz_coefficients(
     """
     require_float64("hertz_coefficients")
     A, B = jnp.asarray(A, dtype=jnp.float64), jnp.asarray(B, dtype=jnp.float64)
-    return _coefficients_of_t(jnp.log(B) - jnp.log(A), method)
+    return _coefficients_of_t(jnp.log(B / A), method)
 
 
 def _effective_modulus(G, nu):

@@ -50,6 +50,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from ..compilation.seldom import seldom
+
 # Table E.3 of Kalker (1990) via CONTACT `linrol`. Rows: a/b = 0.1 ... 1.0, then
 # b/a = 0.9 ... 0.1. Columns: c11 (nu = 0, .25, .5), c22 (same), c23 (same).
 _TABLE = np.array(
@@ -371,9 +373,22 @@ def _kalker_table(a_over_b, nu):
     beta = f[..., 18]
     w_last = jnp.moveaxis(weights, 0, -1)  # (..., 3)
     inv_c = jnp.sum(p * w_last, axis=-1)
-    asym = _asymptote(a_over_b, x, nu)
-    blended = jnp.exp(beta * jnp.log(asym * jnp.sum(pa * w_last, axis=-1))) / inv_c
+    # Within a/b of 0.1 to 10 the blend factor beta is 0 (at the nodes and so between
+    # them): c = 1 / inv_c. Beyond, the blend toward the asymptote, computed only where
+    # some contact of the batch needs it.
+    outer = jnp.abs(x) > _X_HI
+    pa_sum = jnp.moveaxis(jnp.sum(pa * w_last, axis=-1), 0, -1)  # (..., 3)
+    blend, asym = seldom(_outer_terms, outer, a_over_b, x, nu, beta, pa_sum)
+    blend, asym = jnp.moveaxis(blend, -1, 0), jnp.moveaxis(asym, -1, 0)
+    blended = jnp.where(outer, blend, 1.0) / inv_c
     return jnp.where(inside, blended, asym)
+
+
+def _outer_terms(ratio, x, nu, beta, pa_sum):
+    """(blend factors (3,), asymptote (3,)) at one a/b beyond 0.1 to 10 (``pa_sum``
+    (3,): the Pa columns weighted in nu)."""
+    asym = _asymptote(ratio, x, nu)
+    return jnp.exp(beta * jnp.log(asym * pa_sum)), asym
 
 
 def kalker_coefficients(
