@@ -100,3 +100,11 @@ def test_derivatives_equal_the_plain_expressions_and_central_differences():
             np.testing.assert_allclose(grad[0][k], central, rtol=1e-7)
         central = (total(_plain, x, y + h) - total(_plain, x, y - h)) / (2 * h)
         np.testing.assert_allclose(grad[1], central, rtol=1e-7)
+
+
+def test_other_backends_compute_the_branch_for_every_element(monkeypatch):
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    x = jnp.linspace(0.5, 3.5, 8).reshape(4, 2)
+    jaxpr = jax.make_jaxpr(_nested(_selected))(x, 0.7).jaxpr
+    assert _conditionals(jaxpr) == []
+    _close(jax.jit(_nested(_selected))(x, 0.7), _nested(_plain)(x, 0.7))

@@ -20,6 +20,8 @@ nonlinear stability search (:mod:`jaxrail.stability.nonlinear`) and identificati
   kernel that reads them.
 - :mod:`.windows`: ``window_map``, a linear map of a table's window at run-time indices,
   one slice per member of a small ``vmap`` instead of a gather.
+- :mod:`.seldom`: ``seldom``, a branch computed under one conditional for a whole
+  ``vmap``, only when some member needs it, instead of a select of both branches.
 - :mod:`.lru`: the bounded least-recently-used map.
 """
 

@@ -15,6 +15,10 @@ all; a plain ``vmap`` of a ``cond`` would compute both branches. Where ``needed`
 false the result is unspecified (zeros, or ``fn``'s value when another member needs
 it): callers select it with ``needed``. Derivatives are ``fn``'s own, computed for
 every member, as the plain expression's.
+
+Only on the CPU: XLA:GPU reads a conditional's predicate back to the host before it
+runs a branch, a synchronisation per evaluation, so there ``fn`` is computed for every
+element as before (decided when the program is traced, for JAX's default backend).
 """
 
 import functools
@@ -68,7 +72,11 @@ def seldom(fn, needed, *operands):
     of one element's operands (its identity keys a cache); ``operands``: arrays whose
     leading axes are ``needed``'s shape, followed by one element's. Each output has
     ``needed``'s shape followed by its shape for one element."""
-    needed = jnp.asarray(needed, dtype=bool)
-    flat = [jnp.reshape(x, (-1,) + jnp.shape(x)[needed.ndim:]) for x in operands]
-    out = jax.vmap(_seldom(fn))(needed.reshape(-1), *flat)
-    return jax.tree.map(lambda x: x.reshape(needed.shape + x.shape[1:]), out)
+    shape = jnp.shape(needed)
+    needed = jnp.asarray(needed, dtype=bool).reshape(-1)
+    flat = [jnp.reshape(x, (-1,) + jnp.shape(x)[len(shape):]) for x in operands]
+    if jax.default_backend() == "cpu":
+        out = jax.vmap(_seldom(fn))(needed, *flat)
+    else:
+        out = jax.vmap(fn)(*flat)
+    return jax.tree.map(lambda x: x.reshape(shape + x.shape[1:]), out)

@@ -38,7 +38,9 @@ functions P, Pa, beta of x, which are tabulated as piecewise cubic Hermite inter
 grid in x of step log(10)/230 with the table ends x = +-log 10 on nodes, for
 |x| <= 6.01 (a/b in [2.5e-3, 400]); beyond, the blend and the end corrections are 1 and
 0 to rounding and c = c_asym(x, nu) exactly. c_asym is algebraic in a/b, so what is
-left is 1 logarithm of a/b, 3 logarithms and 3 exponentials. C1 in a/b (the Hermite
+left is 1 logarithm of a/b, and beyond a/b of 0.1 to 10 (where beta > 0) 3 logarithms and
+3 exponentials, computed only where some contact of a batch needs them
+(:func:`jaxrail.compilation.seldom.seldom`). C1 in a/b (the Hermite
 interpolant's second derivative jumps at the nodes, by ~1e-6 relative) and within
 1e-6 relative of ``method="direct"`` (the evaluation above, the reference)
 for all a/b > 0 and 0 <= nu <= 0.5 (tests/contact/test_kalker_table.py).
