@@ -48,12 +48,9 @@ def _seldom(fn):
         return out, jax.tree.map(lambda _: True, out)
 
     def jvp(primals, tangents):
-        needed, *operands = primals
-        out = branch(needed, *operands)
-        # fn's own tangent for every member (the plain expression's), so that reverse
-        # mode can transpose it
-        _, tangent = jax.jvp(fn, tuple(operands), tuple(tangents[1:]))
-        return out, tangent
+        # fn's own value and tangent for every member (the plain expression's): the
+        # tangent needs fn's value anyway, and reverse mode can transpose it
+        return jax.jvp(fn, tuple(primals[1:]), tuple(tangents[1:]))
 
     wrapped = jax.custom_jvp(branch)
     wrapped.defjvp(jvp)

@@ -38,8 +38,8 @@ returned field (tests/contact/test_hertz_table.py). Beyond |t| = 32 the e -> 1
 asymptote K = log 4 + u, E = 1 is used (there exact to rounding): t = 2u - log(K - 1),
 m^3 = 2 (K - 1)(1 + B/A)/pi; its seven logarithms are computed only where some patch
 of a batch needs them (:func:`jaxrail.compilation.seldom.seldom`). The table is built
-from the exact path on first use (``functools.cache``), not at import. ``method="exact"`` evaluates the Newton/elliptic
-path, the reference.
+from the exact path on first use (``functools.cache``), not at import.
+``method="exact"`` evaluates the Newton/elliptic path, the reference.
 
 Zero load: a = b = approach = p0 = 0 with zero (finite) gradient at N = 0, although
 the true derivative d a / d N ~ N^(-2/3) is infinite there. Negative N counts as 0.
