@@ -233,14 +233,19 @@ def strip_point(
             (columns, global) at the rail section ``s_r``.
         side: +1.0 left wheel, -1.0 right wheel.
         foot_derivatives: False (static) where only the depth is differentiated: the
-            rail foot ``u_r`` then carries no derivatives and the depth is
-            :func:`depth_at_foot`'s.
+            rail foot ``u_r`` then carries no derivatives and the depth is the
+            rail's :meth:`~jaxrail.profiles.Profile.normal_foot_depth` where it has
+            one, else :func:`depth_at_foot`'s.
     """
     point, s_w = wheel_surface_point(surface, nominal_radius, y, wheel_origin, frame, side)
     rel = point - rail_origin
     t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
     eta, zeta = side * (rel @ n), rel @ b
     u, inside = rail_foot(rail, eta, zeta, foot_derivatives)
-    depth = (signed_depth(rail, u, eta, zeta) if foot_derivatives
-             else depth_at_foot(rail, eta, zeta, u))
+    # the rail's closed form (the UIC60 head: one sector for the foot and the depth)
+    # where it has one, else the depth measured from the foot
+    depth = None if foot_derivatives else rail.normal_foot_depth(eta, zeta)
+    if depth is None:
+        depth = (signed_depth(rail, u, eta, zeta) if foot_derivatives
+                 else depth_at_foot(rail, eta, zeta, u))
     return StripPoint(depth, s_w, rel @ t, u, point, inside)

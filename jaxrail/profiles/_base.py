@@ -66,6 +66,13 @@ class Profile(eqx.Module):
         :func:`jaxrail.contact.strip.rail_foot`)."""
         return None
 
+    def normal_foot_depth(self, eta: Float[ArrayLike, ""], zeta: Float[ArrayLike, ""]):
+        """The signed depth [m] of the point ``(eta, zeta)`` [m] below the profile along
+        the normal at its :meth:`normal_foot` (positive inside), in closed form with
+        exact derivatives, or None where the profile has none (the search then measures
+        it from the foot, :func:`jaxrail.contact.strip.depth_at_foot`)."""
+        return None
+
     def slope(self, y: Float[ArrayLike, ""]) -> Float[Array, ""]:
         """``d height / d y`` [-] at ``y`` [m]."""
         return self.height_derivatives(y)[1]

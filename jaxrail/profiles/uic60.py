@@ -292,6 +292,19 @@ class UIC60(ClosedFormProfile):
         point's projection on the flank line. Exact for points closer to the head than
         its smallest radius (13 mm) on its concave side. A point past the normal line at
         a domain end gets that end, where the search's Newton steps end too."""
+        return self._foot_and_depth(eta, zeta)[0]
+
+    def normal_foot_depth(self, eta: Float[ArrayLike, ""], zeta: Float[ArrayLike, ""]) -> Array:
+        """Signed depth [m] of ``(eta, zeta)`` [m] below the head along the normal at its
+        :meth:`normal_foot` (:meth:`Profile.normal_foot_depth`), in closed form: the
+        radius less the distance from the centre in an arc's sector, the distance below
+        the line in a flank's, the distance below the end's tangent line past a domain
+        end. Its derivatives are exact (no foot derivative enters the distance to a
+        circle or a line)."""
+        return self._foot_and_depth(eta, zeta)[1]
+
+    def _foot_and_depth(self, eta, zeta):
+        """:meth:`normal_foot` and :meth:`normal_foot_depth` [m], from one sector."""
         table = self._table()
         joint_y, joint_z = table[1:, 3], table[1:, 7]
         # the centre of an arc at each joint (the joint's normal line passes through it)
@@ -299,20 +312,34 @@ class UIC60(ClosedFormProfile):
         along = (eta - joint_y) * (joint_z - centre_z) - (zeta - joint_z) * (joint_y - centre_y)
         row = table[jnp.sum((along > 0.0).astype(jnp.int32))]
         yc, y0, dy, zc, z0, dz, radius, is_line = (row[i] for i in (0, 1, 2, 4, 5, 6, 8, 9))
-        ray = jnp.hypot(eta - yc, zeta - zc)
-        on_arc = yc + radius * (eta - yc) / jnp.where(ray > 0.0, ray, 1.0)
+        is_line = is_line > 0.5
+        ray_sq = (eta - yc) ** 2 + (zeta - zc) ** 2
+        centred = ray_sq > 0.0  # double where: no NaN in a derivative at the centre
+        ray = jnp.sqrt(jnp.where(centred, ray_sq, 1.0))
+        on_arc = yc + radius * (eta - yc) / ray
         on_line = y0 + dy * ((eta - y0) * dy + (zeta - z0) * dz) / (dy * dy + dz * dz)
-        foot = jnp.clip(jnp.where(is_line > 0.5, on_line, on_arc), self.y_min, self.y_max)
+        foot = jnp.where(is_line, on_line, on_arc)
+        # a line's depth as signed_depth takes it (slope 0 on a vertical flank, which
+        # lies outside the domain)
+        steep = jnp.abs(dy) <= 1e-12
+        m = jnp.where(steep, 0.0, dz / jnp.where(steep, 1.0, dy))
+        below_line = -((zeta - z0) - (eta - y0) * m) / jnp.sqrt(1.0 + m * m)
+        depth = jnp.where(is_line, below_line, jnp.where(centred, radius - ray, radius))
         # past the normal line at a domain end (also deep beside the head, where the
-        # joints' normal lines cross): that end, the nearer one where past both
-        past, distance = [], []
+        # joints' normal lines cross), or a foot beyond an end: that end, the nearer one
+        # where past both, and the depth below its tangent line
+        past, distance, below_end = [], [], []
         for end in self.domain:
             height, slope, _ = self.height_derivatives(end)
             past.append((eta - end) + (zeta - height) * slope)
             distance.append((eta - end) ** 2 + (zeta - height) ** 2)
+            below_end.append(-((zeta - height) - (eta - end) * slope) / jnp.sqrt(1.0 + slope * slope))
         past_low, past_high = past[0] < 0.0, past[1] > 0.0
         low = past_low & ~(past_high & (distance[1] < distance[0]))
-        return jnp.where(low, self.y_min, jnp.where(past_high, self.y_max, foot))
+        high = ~low & (past_high | (foot >= self.y_max))
+        low = low | ~high & (foot <= self.y_min)
+        foot = jnp.where(low, self.y_min, jnp.where(high, self.y_max, foot))
+        return foot, jnp.where(low, below_end[0], jnp.where(high, below_end[1], depth))
 
 
 _NAMED_INCLINATIONS = {"1:40": 1.0 / 40.0, "1:20": 1.0 / 20.0, "none": 0.0, "0": 0.0}

@@ -330,20 +330,12 @@ def test_negative_inclination_is_the_mirror_image():
     np.testing.assert_allclose(h, h_mirrored, atol=1e-15)
 
 
-@jax.jit
-def _feet(rails, eta, zeta):
-    return [jax.vmap(rail.normal_foot)(e, z) for rail, e, z in zip(rails, eta, zeta)]
-
-
-def test_normal_foot_is_the_nearest_point_of_the_head():
-    """The closed-form foot of the normal (arcs and flanks by sector) against a brute-
-    force nearest point over the domain, sampled every 2 um, for points from 3 mm inside
-    the head to 20 mm outside it, past both domain ends too; where the foot is inside
-    the domain, eq. (15)'s residual (eta - u) + (zeta - f(u)) f'(u) vanishes; and its
-    derivative (jit, vmap, grad) against central differences."""
-    rng = np.random.default_rng(3)
-    count = 400
-    etas, zetas, nearest = [], [], []
+def _points_near_head(count, seed=3):
+    """Per rail, ``count`` points from 3 mm inside the head to 20 mm outside it, past both
+    domain ends too: their (eta, zeta) [m], and by brute force over the domain, sampled
+    every 2 um, the nearest point's coordinate [m] and its distance [m]."""
+    rng = np.random.default_rng(seed)
+    etas, zetas, nearest, distances = [], [], [], []
     for key in KEYS:
         rail = RAILS[key]
         lo, hi = rail.domain
@@ -356,7 +348,25 @@ def test_normal_foot_is_the_nearest_point_of_the_head():
         grid = np.linspace(lo, hi, int((hi - lo) / 2e-6) + 1)
         surface = np.asarray(jax.vmap(rail.height)(jnp.asarray(grid)))
         distance = (eta[:, None] - grid) ** 2 + (zeta[:, None] - surface) ** 2
-        etas.append(eta), zetas.append(zeta), nearest.append(grid[np.argmin(distance, axis=1)])
+        closest = np.argmin(distance, axis=1)
+        etas.append(eta), zetas.append(zeta), nearest.append(grid[closest])
+        distances.append(np.sqrt(distance[np.arange(count), closest]))
+    return etas, zetas, nearest, distances
+
+
+@jax.jit
+def _feet(rails, eta, zeta):
+    return [jax.vmap(rail.normal_foot)(e, z) for rail, e, z in zip(rails, eta, zeta)]
+
+
+def test_normal_foot_is_the_nearest_point_of_the_head():
+    """The closed-form foot of the normal (arcs and flanks by sector) against a brute-
+    force nearest point over the domain, sampled every 2 um, for points from 3 mm inside
+    the head to 20 mm outside it, past both domain ends too; where the foot is inside
+    the domain, eq. (15)'s residual (eta - u) + (zeta - f(u)) f'(u) vanishes; and its
+    derivative (jit, vmap, grad) against central differences."""
+    count = 400
+    etas, zetas, nearest, _ = _points_near_head(count)
     feet = _feet(tuple(RAILS[k] for k in KEYS), jnp.asarray(np.array(etas)),
                  jnp.asarray(np.array(zetas)))
     for key, eta, zeta, near, foot in zip(KEYS, etas, zetas, nearest, feet):
@@ -374,3 +384,63 @@ def test_normal_foot_is_the_nearest_point_of_the_head():
         plus = rail.normal_foot(eta + h * (k == 0), zeta + h * (k == 1))
         minus = rail.normal_foot(eta - h * (k == 0), zeta - h * (k == 1))
         assert float(du[k]) == pytest.approx(float(plus - minus) / (2 * h), rel=1e-6, abs=1e-9)
+
+
+@jax.jit
+def _foot_depths(rails, eta, zeta):
+    return [jax.vmap(rail.normal_foot_depth)(e, z) for rail, e, z in zip(rails, eta, zeta)]
+
+
+def test_normal_foot_depth_is_the_distance_to_the_head():
+    """The closed-form depth (radius less the distance from an arc's centre, the distance
+    below a flank) against the brute-force distance to the sampled head where the foot
+    is inside the domain (positive below the surface), against the distance below the
+    end's tangent line past a domain end; its derivatives in the point and in the
+    inclination (jit, vmap, grad) against central differences; finite at an arc's
+    centre."""
+    count = 400
+    etas, zetas, _, distances = _points_near_head(count, seed=5)
+    rails = tuple(RAILS[k] for k in KEYS)
+    eta_all, zeta_all = jnp.asarray(np.array(etas)), jnp.asarray(np.array(zetas))
+    depths, feet = _foot_depths(rails, eta_all, zeta_all), _feet(rails, eta_all, zeta_all)
+    for key, eta, zeta, distance, depth, foot in zip(KEYS, etas, zetas, distances, depths, feet):
+        rail, depth, foot = RAILS[key], np.asarray(depth), np.asarray(foot)
+        lo, hi = rail.domain
+        inside = (foot > lo) & (foot < hi)
+        below = zeta < np.asarray(jax.vmap(rail.height)(jnp.asarray(eta)))
+        f, f1, _ = (np.asarray(v) for v in jax.vmap(rail.height_derivatives)(jnp.asarray(foot)))
+        # The nearest sample lies within half a step of 2 um in y, an arc length of
+        # a = 1 um sqrt(1 + f'^2), of the foot: farther by at most a^2 (1 + d / 13 mm) / (2 d)
+        # at a distance d.
+        arc = 1e-6 * np.sqrt(1 + f1 * f1)
+        excess = distance - np.abs(depth)
+        bound = np.minimum(arc**2 * (1 + distance / 13e-3) / (2 * distance), arc) + 1e-15
+        assert np.all(((excess > -1e-15) & (excess < bound))[inside]), key
+        assert np.all(((depth > 0) == below)[inside & (distance > 1e-6)]), key
+        tangent = -((zeta - f) - (eta - foot) * f1) / np.sqrt(1 + f1 * f1)
+        assert (~inside).sum() > 0.05 * count
+        np.testing.assert_allclose(depth[~inside], tangent[~inside], atol=1e-15, err_msg=key)
+
+    def depth_of(theta, eta, zeta):
+        rail = eqx.tree_at(lambda r: r.inclination, RAILS["1:40"], theta)
+        return rail.normal_foot_depth(eta, zeta)
+
+    grad = jax.jit(jax.vmap(jax.grad(depth_of, argnums=(0, 1, 2)), in_axes=(None, 0, 0)))
+    theta = RAILS["1:40"].inclination
+    picked = np.arange(0, count, 40)
+    eta, zeta = etas[1][picked], zetas[1][picked]
+    exact = grad(theta, jnp.asarray(eta), jnp.asarray(zeta))
+    step = 1e-7
+    for k in range(3):
+        args = [np.full(eta.shape, float(theta)), eta, zeta]
+        plus, minus = [a.copy() for a in args], [a.copy() for a in args]
+        plus[k] += step
+        minus[k] -= step
+        fd = (np.array([depth_of(*a) for a in zip(*plus)])
+              - np.array([depth_of(*a) for a in zip(*minus)])) / (2 * step)
+        np.testing.assert_allclose(exact[k], fd, rtol=1e-6, atol=1e-8, err_msg=f"argument {k}")
+    # at the centre of the gauge-side R13 corner arc (piece 1) the distance is the radius
+    table = RAILS["1:40"]._table()
+    centre = (table[1, 0], table[1, 4])
+    at_centre = jax.grad(depth_of, argnums=(1, 2))(theta, *centre)
+    assert np.all(np.isfinite(np.asarray(at_centre)))
