@@ -203,6 +203,21 @@ def _lateral_order(chosen, found, n):
             jnp.any(into & found[None, :], axis=1))
 
 
+def first_argmax(values, axis: int = -1):
+    """``jnp.argmax``: the index (int32) of the first largest entry along ``axis``, by a
+    maximum and a minimum over the indices where it is reached, two plain reductions
+    (XLA:CPU runs argmax's reduction of pairs, compiled into a loop, several times
+    slower). ``values`` pass an optimisation barrier first, so that both reductions
+    read the same numbers (XLA may otherwise compute a fused producer twice, rounded
+    differently). Where the maximum is NaN, the last index."""
+    values = jax.lax.optimization_barrier(values)
+    n = values.shape[axis]
+    top = jnp.max(values, axis=axis, keepdims=True)
+    positions = jax.lax.broadcasted_iota(jnp.int32, values.shape, axis % values.ndim)
+    first = jnp.min(jnp.where(values == top, positions, n - 1), axis=axis)
+    return first.astype(jnp.int32)
+
+
 def _top_indices(score, k: int):
     """Indices of the ``k`` largest entries of ``score``, largest first, the lower index
     first among equal ones: ``lax.top_k``'s, by ``k`` arg-maxima (on the CPU ``top_k``
@@ -210,7 +225,7 @@ def _top_indices(score, k: int):
     positions = jnp.arange(score.shape[0])
     chosen = []
     for _ in range(k):
-        best = jnp.argmax(score)
+        best = first_argmax(score)
         chosen.append(best)
         score = jnp.where(positions == best, -jnp.inf, score)
     return jnp.stack(chosen).astype(jnp.int32)
@@ -254,17 +269,18 @@ def _strip_shares(depth, inside, runs, cut_left, cut_right, chosen, found):
 WIDE_FROM, WIDE_FULL = 3.0e-3, 6.0e-3
 
 
-def _strip_coefficients(depth, y_grid):
-    """(3, n): what a unit weight at each strip adds to the zeroth, first and second
-    moments about ``y = 0`` of a density that is linear between strips (:func:`_segment_moments`).
+def _segment_coefficients(depth, y_grid):
+    """What a unit weight at the start and at the end of each segment between strips
+    adds to the zeroth, first and second moments about ``y = 0`` of a density that is
+    linear between strips (:func:`_segment_moments`): two tuples of three (n - 1,) rows.
 
     Where the signed ``depth`` changes sign between two strips, the density falls to
     zero at the crossing of the linear interpolant, so the moments change continuously
     as a patch edge passes a strip. A segment of length L from ``a`` to ``b`` (densities
     at its ends) with middle ``c`` has moments ``L (a + b) / 2``, ``L^2 (b - a) / 12 +
     c M0`` and ``L^3 (a + b) / 24 + c (2 M1' + c M0)`` (``M1'`` its own first moment
-    about ``c``), linear in ``a`` and ``b``: their coefficients, summed per strip over the
-    segment before it and the one after it."""
+    about ``c``), linear in ``a`` and ``b``: their coefficients. Rows, not one stacked
+    array: XLA fuses a stack's producers into it and computes them once per row."""
     x0, x1 = y_grid[:-1], y_grid[1:]
     d0, d1 = depth[:-1], depth[1:]
     in0, in1 = d0 > 0.0, d1 > 0.0
@@ -277,10 +293,10 @@ def _strip_coefficients(depth, y_grid):
     half, twelfth = 0.5 * length, length**2 / 12.0
     first = middle * half  # the middle's share of the first moment
     third = length**3 / 24.0 + middle * first
-    at_start = jnp.stack([half, first - twelfth, third - 2.0 * middle * twelfth]) * in0
-    at_end = jnp.stack([half, first + twelfth, third + 2.0 * middle * twelfth]) * in1
-    none = jnp.zeros((3, 1))
-    return jnp.concatenate([at_start, none], axis=1) + jnp.concatenate([none, at_end], axis=1)
+    at_start = (half, first - twelfth, third - 2.0 * middle * twelfth)
+    at_end = (half, first + twelfth, third + 2.0 * middle * twelfth)
+    return (tuple(jnp.where(in0, c, 0.0) for c in at_start),
+            tuple(jnp.where(in1, c, 0.0) for c in at_end))
 
 
 def _segment_moments(weights, depth, y_grid, origin):
@@ -288,15 +304,15 @@ def _segment_moments(weights, depth, y_grid, origin):
     ``origin`` [m]: ``weights`` (..., n) and ``origin`` (...) for any number of patches
     over the same strips.
 
-    One product of the weights with the strips' coefficients (:func:`_strip_coefficients`):
-    a product's operands are computed once, where sums over strips would each repeat
-    the weights and the segments' geometry (XLA fuses such cheap producers into every
-    consumer). The moments about ``y = 0`` are then moved to the origin, which costs
-    the second moment about the centre ``log10(y^2 / variance)`` of its 16 digits: 4
-    for a patch 3 mm wide (``WIDE_FROM``, below which the centre is not used) 70 mm
-    from the taping line."""
-    whole = weights @ _strip_coefficients(depth, y_grid).T  # (..., 3) about y = 0
-    m0, m1, m2 = whole[..., 0], whole[..., 1], whole[..., 2]
+    Products of the weights at the segments' starts and ends with their coefficients
+    (:func:`_segment_coefficients`): a product's operands are computed once, where sums
+    over strips would each repeat the weights and the segments' geometry (XLA fuses
+    such cheap producers into every consumer). The moments about ``y = 0`` are then
+    moved to the origin, which costs the second moment about the centre
+    ``log10(y^2 / variance)`` of its 16 digits: 4 for a patch 3 mm wide (``WIDE_FROM``,
+    below which the centre is not used) 70 mm from the taping line."""
+    at_start, at_end = _segment_coefficients(depth, y_grid)
+    m0, m1, m2 = (weights[..., :-1] @ s + weights[..., 1:] @ e for s, e in zip(at_start, at_end))
     origin = jnp.asarray(origin)
     return m0, m1 - origin * m0, m2 - origin * (2.0 * m1 - origin * m0)
 
@@ -325,7 +341,7 @@ def overlap_density(weights: Float[Array, "... n"], depth: Float[Array, " n"],
     m0, m1, m2 = _segment_moments(weights, depth, y_grid, y_deepest)
     # the largest weight by its index, not jnp.max: max's derivative divides by the count
     # of entries equal to it, which XLA can make zero by computing the two differently
-    peak = jnp.take_along_axis(weights, jnp.argmax(weights, axis=-1)[..., None], axis=-1)[..., 0]
+    peak = jnp.take_along_axis(weights, first_argmax(weights)[..., None], axis=-1)[..., 0]
     some = (m0 > 0.0) & (peak > 0.0)
     safe_m0 = jnp.where(some, m0, 1.0)
     breadth = jnp.where(some, m0 / jnp.where(some, peak, 1.0), 0.0)

@@ -181,3 +181,19 @@ def test_top_indices_equals_lax_top_k():
         row = jnp.asarray(row)
         for k in (1, 3, 6):
             np.testing.assert_array_equal(_top_indices(row, k), jax.lax.top_k(row, k)[1])
+
+
+def test_first_argmax_equals_argmax():
+    """first_argmax (a maximum, then the first index reaching it) gives jnp.argmax's
+    index along any axis, ties included, under jit and vmap; the last index where the
+    maximum is NaN."""
+    from jaxrail.contact.patches import first_argmax
+
+    rng = np.random.default_rng(7)
+    rows = jnp.asarray(np.stack([rng.normal(size=(5, 131)), np.round(rng.normal(size=(5, 131))),
+                                 np.full((5, 131), -1.0e3)]))
+    for axis in (-1, 0, 1):
+        np.testing.assert_array_equal(jax.jit(first_argmax, static_argnums=1)(rows, axis),
+                                      jnp.argmax(rows, axis=axis))
+    np.testing.assert_array_equal(jax.vmap(jax.vmap(first_argmax))(rows), jnp.argmax(rows, axis=-1))
+    assert int(first_argmax(jnp.array([1.0, jnp.nan, 2.0]))) == 2
