@@ -18,6 +18,7 @@ from jaxtyping import Array, Bool, Float, Int
 _NO_PATCH = -1.0e3  # depth placeholder outside a patch: finite, so gradients stay finite
 NEWTON_STEPS = 2
 CANDIDATE_DEPTH = 1.0e-4  # [m] local maxima this close to contact are refined
+ARGMAX_SLACK = 1.0e-9  # entries this close (relative) to the largest count as largest
 
 
 def _parabola_peak(depth):
@@ -204,17 +205,19 @@ def _lateral_order(chosen, found, n):
 
 
 def first_argmax(values, axis: int = -1):
-    """``jnp.argmax``: the index (int32) of the first largest entry along ``axis``, by a
-    maximum and a minimum over the indices where it is reached, two plain reductions
-    (XLA:CPU runs argmax's reduction of pairs, compiled into a loop, several times
-    slower). ``values`` pass an optimisation barrier first, so that both reductions
-    read the same numbers (XLA may otherwise compute a fused producer twice, rounded
-    differently). Where the maximum is NaN, the last index."""
-    values = jax.lax.optimization_barrier(values)
+    """``jnp.argmax`` up to rounding: the index (int32) of the first entry along ``axis``
+    within ``ARGMAX_SLACK`` (relative) of the largest, by a maximum and then a minimum
+    over the indices reaching it, two plain reductions (XLA:CPU runs argmax's reduction
+    of pairs, compiled into a loop, several times slower). The slack because XLA may
+    compute a fused producer of ``values`` again in each reduction, rounded differently
+    (its CPU code generation contracts a multiplication and an addition into one where
+    it can), so that no entry would equal the maximum. Where the maximum is NaN, the
+    last index."""
     n = values.shape[axis]
     top = jnp.max(values, axis=axis, keepdims=True)
+    slack = jnp.where(jnp.isfinite(top), ARGMAX_SLACK * jnp.abs(top), 0.0)
     positions = jax.lax.broadcasted_iota(jnp.int32, values.shape, axis % values.ndim)
-    first = jnp.min(jnp.where(values == top, positions, n - 1), axis=axis)
+    first = jnp.min(jnp.where(values >= top - slack, positions, n - 1), axis=axis)
     return first.astype(jnp.int32)
 
 

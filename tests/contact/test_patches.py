@@ -184,16 +184,18 @@ def test_top_indices_equals_lax_top_k():
 
 
 def test_first_argmax_equals_argmax():
-    """first_argmax (a maximum, then the first index reaching it) gives jnp.argmax's
-    index along any axis, ties included, under jit and vmap; the last index where the
-    maximum is NaN."""
+    """first_argmax (a maximum, then the first index within 1e-9 of it) gives jnp.argmax's
+    index along any axis, ties and infinities included, under jit and vmap; the first of
+    two entries 1e-12 apart; the last index where the maximum is NaN."""
     from jaxrail.contact.patches import first_argmax
 
     rng = np.random.default_rng(7)
     rows = jnp.asarray(np.stack([rng.normal(size=(5, 131)), np.round(rng.normal(size=(5, 131))),
-                                 np.full((5, 131), -1.0e3)]))
-    for axis in (-1, 0, 1):
+                                 np.full((5, 131), -1.0e3), np.full((5, 131), -np.inf)]))
+    for axis in (-1, 0, 1, 2):
         np.testing.assert_array_equal(jax.jit(first_argmax, static_argnums=1)(rows, axis),
                                       jnp.argmax(rows, axis=axis))
     np.testing.assert_array_equal(jax.vmap(jax.vmap(first_argmax))(rows), jnp.argmax(rows, axis=-1))
+    assert int(first_argmax(jnp.array([1.0, jnp.inf, 2.0, jnp.inf]))) == 1
+    assert int(first_argmax(jnp.array([0.5, 2.0, 2.0 + 2e-12, 1.0]))) == 1
     assert int(first_argmax(jnp.array([1.0, jnp.nan, 2.0]))) == 2
