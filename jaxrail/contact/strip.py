@@ -30,7 +30,7 @@ import numpy as np
 from jax.custom_derivatives import SymbolicZero
 from jaxtyping import Array, Float
 
-from ..profiles import Profile, frozen
+from ..profiles import Profile, below_tangent, frozen
 
 RAIL_NEWTON_STEPS = 5
 
@@ -178,8 +178,7 @@ def signed_depth(rail: Profile, u, eta, zeta) -> Float[Array, ""]:
     zero at the foot, so the depth's first derivatives need none of ``u``
     (:func:`depth_at_foot`)."""
     f, f1, _ = rail.height_derivatives(u)
-    gap = (zeta - f) - (eta - u) * f1
-    return -gap / jnp.sqrt(1.0 + f1 * f1)
+    return below_tangent(eta, zeta, u, f, f1)
 
 
 def _depth_at(rail, eta, zeta, u):
@@ -242,10 +241,10 @@ def strip_point(
     t, n, b = rail_axes[:, 0], rail_axes[:, 1], rail_axes[:, 2]
     eta, zeta = side * (rel @ n), rel @ b
     u, inside = rail_foot(rail, eta, zeta, foot_derivatives)
-    # the rail's closed form (the UIC60 head: one sector for the foot and the depth)
-    # where it has one, else the depth measured from the foot
-    depth = None if foot_derivatives else rail.normal_foot_depth(eta, zeta)
-    if depth is None:
-        depth = (signed_depth(rail, u, eta, zeta) if foot_derivatives
-                 else depth_at_foot(rail, eta, zeta, u))
+    if foot_derivatives:
+        depth = signed_depth(rail, u, eta, zeta)
+    else:  # the rail's closed form where it has one (the UIC60 head), else from the foot
+        depth = rail.normal_foot_depth(eta, zeta)
+        if depth is None:
+            depth = depth_at_foot(rail, eta, zeta, u)
     return StripPoint(depth, s_w, rel @ t, u, point, inside)

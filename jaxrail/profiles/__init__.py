@@ -2,6 +2,7 @@
 
 from ._base import Profile as Profile
 from ._base import WheelProfile as WheelProfile
+from ._base import below_tangent as below_tangent
 from ._base import frozen as frozen
 from .files import read_profile as read_profile
 from .files import sample_profile as sample_profile
@@ -24,8 +25,8 @@ from .tabulated import tabulated_wheel as tabulated_wheel
 from .uic60 import UIC60 as UIC60
 from .uic60 import uic60 as uic60
 
-__all__ = ["flange_angle", "flange_height", "flange_qr", "flange_thickness", "frozen",
-           "gauge_point", "highest_point", "Profile", "rail_offset", "read_profile",
+__all__ = ["below_tangent", "flange_angle", "flange_height", "flange_qr", "flange_thickness",
+           "frozen", "gauge_point", "highest_point", "Profile", "rail_offset", "read_profile",
            "S1002", "s1002", "sample_profile", "simplified_s1002", "SimplifiedFlange",
            "SimplifiedTread", "tabulated_rail", "tabulated_wheel", "TabulatedProfile",
            "UIC60", "uic60", "WheelProfile", "write_profile_csv"]

@@ -126,3 +126,10 @@ def frozen(tree):
     loops must trace no tangents (the measures' bisections, the rail foot's Newton
     steps), before one last step with the real profile carries the derivatives."""
     return jax.tree.map(lambda x: jax.lax.stop_gradient(x) if eqx.is_array(x) else x, tree)
+
+
+def below_tangent(eta, zeta, y, height, slope):
+    """Signed distance [m] of the point ``(eta, zeta)`` [m] below the line through
+    ``(y, height)`` [m] with ``slope`` [-] (positive below): a profile's depth under
+    its tangent line at ``y``."""
+    return -((zeta - height) - (eta - y) * slope) / jnp.sqrt(1.0 + slope * slope)

@@ -37,7 +37,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._float64 import require_float64
 from ..compilation import computed_once
-from ._base import ClosedFormProfile
+from ._base import ClosedFormProfile, below_tangent
 
 _MM = 1e-3
 
@@ -323,7 +323,7 @@ class UIC60(ClosedFormProfile):
         # lies outside the domain)
         steep = jnp.abs(dy) <= 1e-12
         m = jnp.where(steep, 0.0, dz / jnp.where(steep, 1.0, dy))
-        below_line = -((zeta - z0) - (eta - y0) * m) / jnp.sqrt(1.0 + m * m)
+        below_line = below_tangent(eta, zeta, y0, z0, m)
         depth = jnp.where(is_line, below_line, jnp.where(centred, radius - ray, radius))
         # past the normal line at a domain end (also deep beside the head, where the
         # joints' normal lines cross), or a foot beyond an end: that end, the nearer one
@@ -333,7 +333,7 @@ class UIC60(ClosedFormProfile):
             height, slope, _ = self.height_derivatives(end)
             past.append((eta - end) + (zeta - height) * slope)
             distance.append((eta - end) ** 2 + (zeta - height) ** 2)
-            below_end.append(-((zeta - height) - (eta - end) * slope) / jnp.sqrt(1.0 + slope * slope))
+            below_end.append(below_tangent(eta, zeta, end, height, slope))
         past_low, past_high = past[0] < 0.0, past[1] > 0.0
         low = past_low & ~(past_high & (distance[1] < distance[0]))
         high = ~low & (past_high | (foot >= self.y_max))
