@@ -16,6 +16,9 @@ os.environ.setdefault("XLA_FLAGS", "--xla_backend_optimization_level=0 "
 # the suite's commands, in this process or in the processes it starts, do not.
 os.environ.setdefault("JAXRAIL_LOOP_KERNELS", "off")
 
+import importlib.util  # noqa: E402
+from pathlib import Path  # noqa: E402
+
 import jax  # noqa: E402
 import pytest  # noqa: E402
 
@@ -106,3 +109,18 @@ _SLOWEST_FIRST = (
 def pytest_collection_modifyitems(items):
     rank = {path: k for k, path in enumerate(_SLOWEST_FIRST)}
     items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
+
+
+def load_xdist_crashes():
+    """tests/xdist_crashes.py, the plugin that keeps ``--dist loadfile`` from hanging
+    when a worker dies (loaded by path: the tests are not a package)."""
+    spec = importlib.util.spec_from_file_location(
+        "jaxrail_tests_xdist_crashes", Path(__file__).with_name("xdist_crashes.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def pytest_configure(config):
+    if config.pluginmanager.hasplugin("xdist"):
+        config.pluginmanager.register(load_xdist_crashes(), "jaxrail-xdist-crashes")
