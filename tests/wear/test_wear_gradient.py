@@ -26,6 +26,9 @@ RELATIVE_STEP = 1e-5
 STEPS = {"friction": (1, 2, 3)}
 FD_RTOL = 1e-3
 T_FROM = 0.5  # [s]
+# its eleven forward-mode runs take 700 s at the suite's LLVM level 0 (each 45-50 s after a
+# 170 s compile), 16 s each at full optimisation
+pytestmark = pytest.mark.usefixtures("integrations_at_level_1")
 
 
 @pytest.fixture(scope="module")
