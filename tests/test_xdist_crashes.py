@@ -20,7 +20,7 @@ def pytest_configure(config):
     config.pluginmanager.register(plugin, "xdist-crashes")
 """
 
-# the first test of test_e dies the first time it runs (SIGABRT, as XLA's compiler did)
+# the first test of test_e dies the first time it runs (SIGABRT, as in a native library)
 DIES_ONCE = """
 import os
 from pathlib import Path

@@ -1,16 +1,14 @@
 """A pytest plugin: the suite's ``--dist loadfile`` made safe against a worker that dies.
 
-A worker process can die in a native library, not in a test's assertion: on 2026-12-03
-XLA's compiler aborted (SIGABRT inside ``backend_compile_and_load``, jaxlib 0.10.2) in
-one CI run, in a small test that passes on rerun and in every other run. pytest-xdist
-3.8's file scheduler then deadlocks at the end of the run: it puts the dead worker's
-whole workload back on the queue, files already finished included, and a worker handed
-an empty file or a lone test waits forever (pytest-xdist issues 784, 1327 and 1378). The
-CI run hung at 98 % until its 90 minutes were up.
+A worker process can die in a native library rather than in a test's assertion (XLA's
+compiler aborting with SIGABRT, say). pytest-xdist 3.8's file scheduler then puts the
+dead worker's whole workload back on the queue, files already finished included, and a
+worker handed an empty file or a lone test waits forever: the run hangs (pytest-xdist
+issues 784, 1327 and 1378).
 
 This scheduler requeues only the dead worker's unfinished files, first in the queue;
 runs the test it died in once more, in a fresh worker (reported ``R``, with the crash in
-the summary); a second death in the same test fails it; and it gives a worker a second
+the summary); fails that test if its worker dies again; and gives a worker a second
 test whenever it holds fewer than two, which the worker needs before it runs one.
 """
 
