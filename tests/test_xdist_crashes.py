@@ -9,17 +9,6 @@ from pathlib import Path
 
 PLUGIN = Path(__file__).with_name("xdist_crashes.py")
 
-CONFTEST = f"""
-import importlib.util
-spec = importlib.util.spec_from_file_location("xdist_crashes", {str(PLUGIN)!r})
-plugin = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(plugin)
-
-
-def pytest_configure(config):
-    config.pluginmanager.register(plugin, "xdist-crashes")
-"""
-
 # the first test of test_e dies the first time it runs (SIGABRT, as in a native library)
 DIES_ONCE = """
 import os
@@ -68,15 +57,17 @@ def _run(tmp_path, dying):
     project = tmp_path / "project"
     project.mkdir()
     (project / "pytest.ini").write_text("[pytest]\n")
-    (project / "conftest.py").write_text(CONFTEST)
     # the dying file last, so that the worker has finished files when it dies: the stock
     # scheduler then hands them out again, empty, and the run hangs
     for name, text in (("test_a.py", PASSING), ("test_b.py", LONE), ("test_c.py", PASSING),
                        ("test_d.py", LONE), ("test_e.py", dying)):
         (project / name).write_text(text)
     env = {k: v for k, v in os.environ.items() if k != "PYTEST_ADDOPTS"}
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(PLUGIN.parent),
+                                                       env.get("PYTHONPATH")]))
     done = subprocess.run([sys.executable, "-m", "pytest", "-n", "2", "--dist", "loadfile",
-                           "-p", "no:cacheprovider", "-q"], cwd=project, env=env,
+                           "-p", PLUGIN.stem, "-p", "no:cacheprovider", "-q"],
+                          cwd=project, env=env,
                           capture_output=True, text=True, timeout=120)
     return done.returncode, done.stdout + done.stderr
 
