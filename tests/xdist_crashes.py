@@ -51,12 +51,11 @@ class CrashTolerantLoadFile(LoadFileScheduling):
     def _reschedule(self, node):
         super()._reschedule(node)
         # a worker runs a test only once it holds the next one (or is told to stop)
-        while (not node.shutting_down and self.workqueue
-               and self._pending_of(self.assigned_work[node]) < 2):
-            self._assign_work_unit(node)
-        if (not node.shutting_down and not self.workqueue
-                and self._pending_of(self.assigned_work[node]) < 2):
-            node.shutdown()
+        while not node.shutting_down and self._pending_of(self.assigned_work[node]) < 2:
+            if not self.workqueue:
+                node.shutdown()
+            else:
+                self._assign_work_unit(node)
 
 
 @pytest.hookimpl(tryfirst=True)
